@@ -1,0 +1,138 @@
+"""Load and validate ``case.toml`` (plus ``--set section.key=value`` overrides) into a Case."""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from .params import CaseError, build_section
+from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, GeometryKind
+
+CASE_FILE = "case.toml"
+
+# Geometry keys that only make sense for some kinds: a rectangle with a peduncle is a typo.
+_FISH_ONLY = {
+    "preset",
+    "body_length_m",
+    "max_height_m",
+    "peduncle_height_m",
+    "caudal_fin_height_m",
+    "head_length_m",
+    "taper_start_x_m",
+    "peduncle_x_m",
+    "nose_height_fraction",
+    "active_length_m",
+    "active_width_m",
+    "head_weight_radius_m",
+    "head_weight_thickness_m",
+    "head_weight_x_m",
+}
+_ACTUATOR_KEYS = {
+    "mfc_thickness_m",
+    "actuator_length_m",
+    "actuator_width_m",
+    "actuator_start_x_m",
+    "actuator_sides",
+}
+_NOT_FOR_KIND = {
+    GeometryKind.RECTANGLE: _FISH_ONLY | _ACTUATOR_KEYS,
+    GeometryKind.BEAM: _FISH_ONLY,
+    GeometryKind.FISH: {"length_m", "width_m"},
+}
+
+
+def parse_override(text: str) -> tuple[str, str, Any]:
+    """``"actuation.frequency_hz=5"`` -> ("actuation", "frequency_hz", 5); bare words: strings."""
+    key, sep, raw = text.partition("=")
+    section, dot, name = key.strip().partition(".")
+    if not sep or not dot or not section or not name:
+        raise CaseError(f"--set {text!r} must look like section.key=value")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()  # e.g. --set fluid.model=potential
+    return section, name, value
+
+
+def merge_overrides(raw: dict[str, Any], overrides: Iterable[str]) -> dict[str, Any]:
+    merged = {k: dict(v) if isinstance(v, dict) else v for k, v in raw.items()}
+    for text in overrides:
+        section, name, value = parse_override(text)
+        if section not in SECTIONS:
+            raise CaseError(
+                f"--set {text!r}: unknown section [{section}] (known: {', '.join(SECTIONS)})"
+            )
+        merged.setdefault(section, {})[name] = value
+    return merged
+
+
+def load_case(directory: str | Path, overrides: Iterable[str] = ()) -> Case:
+    """Read ``<directory>/case.toml``; raise CaseError with a one-line message on bad input."""
+    given = Path(directory)
+    path = given if given.name == CASE_FILE else given / CASE_FILE
+    if not path.is_file():
+        raise CaseError(
+            f"{given}: no {CASE_FILE} found (a case is a folder with a "
+            f"{CASE_FILE}; see cases/ for examples)"
+        )
+    directory = path.parent
+    try:
+        raw = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise CaseError(f"{CASE_FILE}: not valid TOML: {err}") from None
+    return case_from_dict(merge_overrides(raw, overrides), directory)
+
+
+def case_from_dict(raw: dict[str, Any], directory: Path) -> Case:
+    unknown = sorted(set(raw) - set(SECTIONS))
+    if unknown:
+        raise CaseError(
+            f"{CASE_FILE}: [{unknown[0]}] is not a known section (known: {', '.join(SECTIONS)})"
+        )
+    try:
+        sections = {
+            name: build_section(cls, name, raw.get(name, {})) for name, cls in SECTIONS.items()
+        }
+        case = Case(directory=directory.resolve(), **sections)
+        _cross_check(case, raw)
+    except CaseError as err:
+        raise CaseError(f"{CASE_FILE}: {err}") from None
+    return case
+
+
+def _cross_check(case: Case, raw: dict[str, Any]) -> None:
+    g = case.geometry
+    given_geometry = set(raw.get("geometry", {}))
+    for key in sorted(given_geometry & _NOT_FOR_KIND[g.kind]):
+        raise CaseError(f'geometry.{key} does not apply to geometry.kind = "{g.kind}"')
+    if g.kind is GeometryKind.RECTANGLE:
+        for key in ("length_m", "width_m", "thickness_m"):
+            if getattr(g, key) is None:
+                raise CaseError(f'geometry.{key} is required for geometry.kind = "rectangle"')
+        for key in ("youngs_modulus_pa", "poisson_ratio", "density_kg_m3"):
+            if getattr(case.material, key) is None:
+                raise CaseError(f'material.{key} is required for geometry.kind = "rectangle"')
+        if case.material.cfrp is not None:
+            raise CaseError('material.cfrp does not apply to geometry.kind = "rectangle"')
+    a = case.actuation
+    lo, hi = MFC_VOLTAGE_RANGE_V
+    for key in ("left_volts", "right_volts", "static_volts"):
+        volts = getattr(a, key)
+        if key != "static_volts" and volts[0] > volts[1]:
+            raise CaseError(f"actuation.{key} must be [min, max], got {list(volts)}")
+        if min(volts) < lo or max(volts) > hi:
+            raise CaseError(
+                f"actuation.{key} must lie within the MFC's range [{lo:g}, {hi:g}] V "
+                f"(Table 3.1), got {list(volts)}"
+            )
+    t = case.time
+    if (t.step_s is None) != (t.end_time_s is None):
+        raise CaseError("time.step_s and time.end_time_s go together: give both or neither")
+
+
+def replace(case: Case, **sections: Any) -> Case:
+    """A copy of ``case`` with whole sections replaced (sections are frozen)."""
+    return dataclasses.replace(case, **sections)

@@ -1,0 +1,398 @@
+"""The case file schema: one frozen dataclass per ``case.toml`` section.
+
+SI units everywhere; each key's unit is in its name. ``None`` means "take the value from the
+geometry preset or the documented default". ``docs/case_format.md`` is generated from this file
+(``python -m fsi_orchestrator.case.docgen``) and a test keeps the two in step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+
+from .params import param
+
+MFC_VOLTAGE_RANGE_V = (-500.0, 1500.0)  # Table 3.1 / Sec. 3.1.2: safe drive range of the M8528-P1
+
+
+class GeometryKind(StrEnum):
+    FISH = "fish"
+    RECTANGLE = "rectangle"
+    BEAM = "beam"
+
+
+class Preset(StrEnum):
+    ORIGINAL = "original"  # Tables 3.4, 4.1
+    SERIAL = "serial"  # Table 5.2
+    INTEGRATIVE = "integrative"  # Table 5.6
+
+
+class ActuatorSides(StrEnum):
+    BOTH = "both"  # bimorph: one MFC on each face (the fish)
+    TOP = "top"  # unimorph: one MFC on the +z face (the beam model of Sec. 3.2)
+
+
+class CfrpProperties(StrEnum):
+    FSI = "fsi"  # Table 3.9: E 29.5 GPa, rho 1700
+    ACOUSTIC = "acoustic"  # Table 3.5: E 20.5 GPa, rho 1643
+    BEAM = "beam"  # Table 3.2: E 20.05 GPa, rho 1643
+
+
+class HeadCondition(StrEnum):
+    CLAMPED = "clamped"
+    FREE = "free"
+
+
+class AnalysisKind(StrEnum):
+    STATIC = "static"
+    DYNAMIC = "dynamic"
+    MODAL = "modal"
+
+
+class Integrator(StrEnum):
+    GENERALIZED_ALPHA = "generalized-alpha"
+    NEWMARK = "newmark"  # average acceleration (trapezoidal rule)
+    ENERGY_CONSERVING = "energy-conserving"  # midpoint rule with a discrete energy gradient
+
+
+class Waveform(StrEnum):
+    SINE = "sine"
+    SQUARE = "square"
+
+
+class MeshLevel(StrEnum):
+    COARSE = "coarse"
+    DEFAULT = "default"
+    FINE = "fine"
+
+
+class FluidModel(StrEnum):
+    NONE = "none"
+    POTENTIAL = "potential"
+    SLENDER_BODY = "slender_body"
+    OPENFOAM = "openfoam"
+
+
+class CouplingScheme(StrEnum):
+    EXPLICIT = "explicit"
+    CONSTANT = "constant"
+    AITKEN = "aitken"
+    IQN_ILS = "iqn-ils"
+    IQN_ILS_AM = "iqn-ils-am"
+    EXPLICIT_AM = "explicit-am"
+
+
+@dataclass(frozen=True, kw_only=True)
+class CaseInfo:
+    title: str = param("", "Free text shown in logs and results.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Geometry:
+    kind: GeometryKind = param(
+        GeometryKind.FISH,
+        "Plate outline: the fish planform, a plain "
+        "isotropic rectangle (verification), or the seed's MFC-on-CFRP "
+        "beam (Table 3.2).",
+    )
+    preset: Preset = param(
+        Preset.ORIGINAL,
+        "Fish robot of the seed whose dimensions are the defaults of every fish key below.",
+    )
+    length_m: float | None = param(
+        None,
+        "rectangle: plate length along x; beam: CFRP length (default 0.087, Table 3.2).",
+        unit="m",
+        gt=0,
+    )
+    width_m: float | None = param(
+        None, "rectangle: plate width along y; beam: CFRP width (default 0.008).", unit="m", gt=0
+    )
+    thickness_m: float | None = param(
+        None,
+        "rectangle: plate thickness; fish and beam: CFRP core "
+        "thickness (default 0.2e-3, or the preset's).",
+        unit="m",
+        gt=0,
+    )
+    body_length_m: float | None = param(None, "fish: nose to trailing edge.", unit="m", gt=0)
+    max_height_m: float | None = param(None, "fish: largest body height.", unit="m", gt=0)
+    peduncle_height_m: float | None = param(
+        None, "fish: height at the caudal peduncle.", unit="m", gt=0
+    )
+    caudal_fin_height_m: float | None = param(
+        None, "fish: height of the (straight) trailing edge of the caudal fin.", unit="m", gt=0
+    )
+    head_length_m: float | None = param(
+        None, "fish: nose to the point of maximum height (elliptic head).", unit="m", gt=0
+    )
+    taper_start_x_m: float | None = param(
+        None, "fish: x where the body starts to taper toward the peduncle.", unit="m", gt=0
+    )
+    peduncle_x_m: float | None = param(
+        None, "fish: x of the caudal peduncle (narrowest section).", unit="m", gt=0
+    )
+    nose_height_fraction: float | None = param(
+        None, "fish: height at the nose as a fraction of max_height_m (blunt nose).", gt=0, lt=1
+    )
+    mfc_thickness_m: float | None = param(
+        None, "Thickness of each MFC layer (Table 3.1: 0.3e-3).", unit="m", gt=0
+    )
+    actuator_length_m: float | None = param(
+        None,
+        "MFC package length along x (fish: 0.112, Table 3.4; beam: 0.085, Table 3.2).",
+        unit="m",
+        gt=0,
+    )
+    actuator_width_m: float | None = param(
+        None, "MFC package width (fish: 0.040; beam: 0.007).", unit="m", gt=0
+    )
+    active_length_m: float | None = param(
+        None, "fish: piezo-active length inside the package (Table 3.4: 0.085).", unit="m", gt=0
+    )
+    active_width_m: float | None = param(
+        None, "fish: piezo-active width (Table 3.4: 0.028).", unit="m", gt=0
+    )
+    actuator_start_x_m: float | None = param(
+        None,
+        "x of the package's front edge (beam: set back from the clamp, default 0.4e-3).",
+        unit="m",
+        ge=0,
+    )
+    actuator_sides: ActuatorSides | None = param(
+        None, "MFC on both faces (fish default) or on the +z face only (beam default)."
+    )
+    head_weight_radius_m: float | None = param(
+        None, "fish: radius of the steel head weight (disk).", unit="m", gt=0
+    )
+    head_weight_thickness_m: float | None = param(
+        None, "fish: thickness of the head weight (Tables 3.5/3.9: 2.5e-3).", unit="m", ge=0
+    )
+    head_weight_x_m: float | None = param(
+        None, "fish: x of the head weight's centre (default radius + 3 mm).", unit="m", gt=0
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Material:
+    youngs_modulus_pa: float | None = param(
+        None,
+        "rectangle: Young's modulus (required); fish/beam: overrides the CFRP core's.",
+        unit="Pa",
+        gt=0,
+    )
+    poisson_ratio: float | None = param(
+        None,
+        "rectangle: Poisson ratio (required); fish/beam: overrides the CFRP core's.",
+        ge=-1,
+        lt=0.5,
+    )
+    density_kg_m3: float | None = param(
+        None,
+        "rectangle: density (required); fish/beam: overrides the CFRP core's.",
+        unit="kg/m^3",
+        gt=0,
+    )
+    cfrp: CfrpProperties | None = param(
+        None, "CFRP property set for fish/beam (default: fsi for the fish, beam for the beam)."
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Actuation:
+    frequency_hz: float = param(3.0, "Driving frequency.", unit="Hz", gt=0)
+    waveform: Waveform = param(Waveform.SINE, "Voltage waveform of both actuators.")
+    left_volts: tuple[float, ...] = param(
+        (-500.0, 1500.0), "[min, max] voltage of the left (+z face) MFC.", unit="V", length=2
+    )
+    right_volts: tuple[float, ...] = param(
+        (-500.0, 1500.0),
+        "[min, max] voltage of the right "
+        "(-z face) MFC, driven in anti-phase (opposite "
+        "sense) to the left one.",
+        unit="V",
+        length=2,
+    )
+    static_volts: tuple[float, ...] = param(
+        (0.0, 0.0),
+        '[left, right] constant voltages used by analysis.kind = "static".',
+        unit="V",
+        length=2,
+    )
+    electrode_spacing_m: float = param(
+        0.5e-3,
+        "W of eq. 3-11 (E = V/W). Not in the seed; about "
+        "1800 ppm free strain over 2000 V with d33 = 460 pm/V "
+        "implies W = 0.51 mm.",
+        unit="m",
+        gt=0,
+    )
+    d33_m_per_v: float = param(
+        460e-12, "Piezo constant along the fibres (Table 3.1, high field).", unit="m/V"
+    )
+    d31_m_per_v: float = param(
+        -210e-12, "Piezo constant across the fibres (Table 3.1, high field).", unit="m/V"
+    )
+    ramp_periods: float = param(
+        0.0,
+        "Periods over which the voltage amplitude ramps up from 0 "
+        "(0: switched on at t = 0 like the seed).",
+        ge=0,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Loads:
+    tip_force_n: float = param(
+        0.0,
+        "rectangle/beam: total dead force on the free edge along +z, "
+        "spread uniformly over the edge.",
+        unit="N",
+    )
+    tip_moment_nm: float = param(
+        0.0,
+        "rectangle/beam: total moment on the free edge about the "
+        "width axis; positive bends toward +z (follows the edge's "
+        "rotation).",
+        unit="N m",
+    )
+    pressure_pa: float = param(
+        0.0, "Uniform follower pressure on the plate, along the current +z-side normal.", unit="Pa"
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Boundary:
+    head: HeadCondition = param(
+        HeadCondition.CLAMPED,
+        'fish: head clamped ("fixed head") or '
+        "free (free-free modal study); rectangle/beam: x = 0 edge "
+        "clamped or free.",
+    )
+    clamp_length_m: float | None = param(
+        None,
+        "fish: nodes with x <= this are clamped (default: "
+        "the head weight's rear edge); rectangle/beam: 0.",
+        unit="m",
+        ge=0,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Analysis:
+    kind: AnalysisKind = param(
+        AnalysisKind.DYNAMIC,
+        "static (load steps, Newton), dynamic "
+        "(implicit time integration, Newton each step) or modal (in "
+        'vacuum, or wet with fluid.model = "potential").',
+    )
+    load_steps: int = param(10, "static: number of load increments.", ge=1)
+    num_modes: int = param(6, "modal: number of elastic modes reported.", ge=1, le=200)
+    integrator: Integrator = param(
+        Integrator.GENERALIZED_ALPHA,
+        "dynamic: time integrator. "
+        "generalized-alpha damps the stiff membrane modes (rho_infinity "
+        "< 1); energy-conserving keeps 1/2 v.Mv + strain energy exact "
+        "(the trapezoidal rule pumps energy into membrane modes at "
+        "moderate rotations).",
+    )
+    rho_infinity: float = param(
+        0.9,
+        "generalized-alpha: spectral radius at infinite frequency (1: no numerical damping).",
+        ge=0,
+        le=1,
+    )
+    newton_tolerance: float = param(
+        1e-8, "Relative tolerance on the Newton increment and energy norm.", gt=0, lt=1
+    )
+    max_newton_iterations: int = param(30, "Newton iterations per step before giving up.", ge=1)
+    rayleigh_alpha_per_s: float = param(
+        0.0, "Mass-proportional Rayleigh damping.", unit="1/s", ge=0
+    )
+    rayleigh_beta_s: float = param(0.0, "Stiffness-proportional Rayleigh damping.", unit="s", ge=0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Time:
+    periods: float = param(3.0, "dynamic: simulated time in driving periods.", gt=0)
+    steps_per_period: int = param(40, "dynamic: time steps (coupling windows) per period.", ge=4)
+    step_s: float | None = param(
+        None, "dynamic without actuation: time step (overrides steps_per_period).", unit="s", gt=0
+    )
+    end_time_s: float | None = param(
+        None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class ShellMesh:
+    level: MeshLevel = param(MeshLevel.DEFAULT, "Shell mesh level (see docs for element counts).")
+    elements_length: int | None = param(None, "Quad9 elements along x (overrides level).", ge=1)
+    elements_width: int | None = param(None, "Quad9 elements across y (overrides level).", ge=1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Fluid:
+    model: FluidModel = param(FluidModel.NONE, "Fluid around the plate.")
+    density_kg_m3: float = param(1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", gt=0)
+    kinematic_viscosity_m2_s: float = param(0.75e-6, "FC-3283 (Table 3.6).", unit="m^2/s", gt=0)
+    mesh_level: MeshLevel = param(MeshLevel.DEFAULT, "Fluid mesh level.")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Coupling:
+    scheme: CouplingScheme = param(CouplingScheme.IQN_ILS_AM, "Partitioned coupling scheme.")
+    relaxation: float = param(
+        0.5, "constant/aitken: (initial) under-relaxation factor.", gt=0, le=1
+    )
+    tolerance_rel: float = param(
+        1e-4, "Relative convergence tolerance of the exchanged data.", gt=0, lt=1
+    )
+    max_iterations: int = param(50, "Coupling iterations per window before failing.", ge=1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Output:
+    vtk: bool = param(True, "Write VTU/PVD series of the shell.")
+    vtk_every: int = param(1, "Write VTU every n windows.", ge=1)
+    checkpoint_every: int = param(10, "Write a restart checkpoint every n windows.", ge=1)
+
+
+SECTIONS: dict[str, type] = {
+    "case": CaseInfo,
+    "geometry": Geometry,
+    "material": Material,
+    "actuation": Actuation,
+    "loads": Loads,
+    "boundary": Boundary,
+    "analysis": Analysis,
+    "time": Time,
+    "mesh": ShellMesh,
+    "fluid": Fluid,
+    "coupling": Coupling,
+    "output": Output,
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class Case:
+    """A validated case: every section typed and frozen."""
+
+    directory: Path
+    case: CaseInfo = field(default_factory=CaseInfo)
+    geometry: Geometry = field(default_factory=Geometry)
+    material: Material = field(default_factory=Material)
+    actuation: Actuation = field(default_factory=Actuation)
+    loads: Loads = field(default_factory=Loads)
+    boundary: Boundary = field(default_factory=Boundary)
+    analysis: Analysis = field(default_factory=Analysis)
+    time: Time = field(default_factory=Time)
+    mesh: ShellMesh = field(default_factory=ShellMesh)
+    fluid: Fluid = field(default_factory=Fluid)
+    coupling: Coupling = field(default_factory=Coupling)
+    output: Output = field(default_factory=Output)
+
+    @property
+    def name(self) -> str:
+        return self.directory.name

@@ -1,0 +1,138 @@
+"""``fsi-run CASE``: run a case (static, dynamic, modal; structure alone or coupled) and print a
+summary (``--json`` for machines)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Sequence
+from contextlib import contextmanager
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..case import Case
+from ..case.schema import AnalysisKind, FluidModel
+from ..loop import OutputSettings, Schedule, WindowLoop
+from .common import EXIT_OK, base_parser, emit, load, run_main
+from .modal import modal_summary
+
+
+def schedule_of(case: Case) -> Schedule:
+    t = case.time
+    if t.step_s is not None and t.end_time_s is not None:
+        return Schedule(dt=t.step_s, n_windows=max(1, round(t.end_time_s / t.step_s)))
+    dt = 1.0 / (case.actuation.frequency_hz * t.steps_per_period)
+    return Schedule(dt=dt, n_windows=max(1, round(t.periods * t.steps_per_period)))
+
+
+def windows_per_period(case: Case) -> int:
+    if case.time.step_s is not None:
+        return max(1, round(1.0 / (case.actuation.frequency_hz * case.time.step_s)))
+    return case.time.steps_per_period
+
+
+@contextmanager
+def progress_bar(total: int, enabled: bool):
+    if not enabled:
+        yield lambda done, total: None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    with Progress(
+        TextColumn("windows"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    ) as bar:
+        task = bar.add_task("run", total=total)
+        yield lambda done, total: bar.update(task, completed=done)
+
+
+def dynamic_summary(case: Case, results_path: Path) -> dict:
+    with h5py.File(results_path, "r") as h5:
+        t = h5["time_s"][:, 0]
+        tip = h5["shell/tip_displacement_m"][:]
+        newton = h5["shell/newton_iterations"][:, 0]
+        wall = h5["wall_s"][:, 0]
+    last = tip[-min(len(tip), windows_per_period(case)) :, 2]
+    return {
+        "tip_displacement_m": tip[-1].tolist(),
+        "tip_amplitude_m": float((last.max() - last.min()) / 2),
+        "tip_max_abs_m": float(np.abs(tip[:, 2]).max()),
+        "end_time_s": float(t[-1]),
+        "windows": int(len(t)),
+        "mean_newton_iterations_per_window": float(newton[-1] / len(t)),
+        "results": str(results_path),
+        "wall_s": float(wall.sum()),
+    }
+
+
+def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
+    from solid_adapter.build import build_shell_participant
+
+    if case.fluid.model is not FluidModel.NONE:
+        raise NotImplementedError_(case)
+    solid = build_shell_participant(case)
+    schedule = schedule_of(case)
+    settings = OutputSettings(
+        directory=output,
+        vtk=case.output.vtk,
+        vtk_every=case.output.vtk_every,
+        checkpoint_every=case.output.checkpoint_every,
+        attributes={"case": str(case.directory), "dt_s": schedule.dt},
+    )
+    start = time.perf_counter()
+    with progress_bar(schedule.n_windows, show_progress) as progress:
+        path = WindowLoop(solid, schedule, settings, progress).run(resume=resume)
+    summary = dynamic_summary(case, path)
+    summary["wall_s"] = time.perf_counter() - start
+    return summary
+
+
+def NotImplementedError_(case: Case) -> RuntimeError:
+    return RuntimeError(
+        f'fluid.model = "{case.fluid.model}" is not available in this version; use "none"'
+    )
+
+
+def static_summary(case: Case) -> dict:
+    from solid_adapter.build import run_static
+
+    res = run_static(case)
+    return {
+        "tip_displacement_m": res.tip_displacement_m.tolist(),
+        "load_steps": case.analysis.load_steps,
+    }
+
+
+def _body(args: argparse.Namespace) -> int:
+    case = load(args)
+    output = Path(args.output) if args.output else case.directory / "output"
+    kind = case.analysis.kind
+    if kind is AnalysisKind.MODAL:
+        summary = modal_summary(case)
+    elif kind is AnalysisKind.STATIC:
+        summary = static_summary(case)
+    else:
+        summary = run_dynamic(case, output, args.resume, show_progress=not args.quiet)
+    emit(summary, args.json)
+    return EXIT_OK
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = base_parser("fsi-run", "Run a case: structure alone or coupled with a fluid.")
+    parser.add_argument("--output", help="output folder (default: CASE/output)")
+    parser.add_argument(
+        "--resume", action="store_true", help="continue a killed run from its last checkpoint"
+    )
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    return run_main(_body, parser, argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,134 @@
+"""The time-window loop: drives participants window by window, records results as they come,
+writes restart checkpoints and resumes from them.
+
+This module knows solvers only through the Participant protocol.
+"""
+
+from __future__ import annotations
+
+import time as wallclock
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .participant import DISPLACEMENT, Participant
+from .results import (
+    CHECKPOINT_FILE,
+    RESULTS_FILE,
+    ResultsFile,
+    VtkSeries,
+    read_checkpoint,
+    write_checkpoint,
+)
+
+
+class ResumeError(RuntimeError):
+    """No usable checkpoint to resume from."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class Schedule:
+    dt: float
+    n_windows: int
+    t0: float = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class OutputSettings:
+    directory: Path
+    vtk: bool = True
+    vtk_every: int = 1
+    checkpoint_every: int = 10
+    attributes: dict = field(default_factory=dict)
+
+
+ProgressFn = Callable[[int, int], None]
+
+
+class WindowLoop:
+    """Runs ``solid`` (and, from the coupling issue on, a fluid) over the schedule."""
+
+    def __init__(
+        self,
+        solid: Participant,
+        schedule: Schedule,
+        output: OutputSettings,
+        progress: ProgressFn | None = None,
+    ) -> None:
+        self.solid, self.schedule, self.output = solid, schedule, output
+        self.progress = progress or (lambda done, total: None)
+        self.window = 0
+
+    @property
+    def participants(self) -> dict[str, Participant]:
+        return {self.solid.name: self.solid}
+
+    def run(self, resume: bool = False) -> Path:
+        out = self.output.directory
+        out.mkdir(parents=True, exist_ok=True)
+        if resume:
+            self._resume(out / CHECKPOINT_FILE)
+        results = ResultsFile(out / RESULTS_FILE, resume_rows=self.window if resume else None)
+        results.set_attributes(self.output.attributes)
+        vtk = self._vtk_writers(out / "vtk", keep_until=self.solid.time if resume else None)
+        try:
+            while self.window < self.schedule.n_windows:
+                start = wallclock.perf_counter()
+                self.solid.solve(self.schedule.dt)
+                self.window += 1
+                self._record(results, vtk, wallclock.perf_counter() - start)
+                if (
+                    self.window % self.output.checkpoint_every == 0
+                    or self.window == self.schedule.n_windows
+                ):
+                    self._checkpoint(out / CHECKPOINT_FILE)
+                self.progress(self.window, self.schedule.n_windows)
+        finally:
+            results.close()
+        return out / RESULTS_FILE
+
+    # ----------------------------------------------------------------- recording
+    def _record(self, results: ResultsFile, vtk: dict[str, VtkSeries], wall_s: float) -> None:
+        row: dict[str, object] = {"time_s": self.solid.time, "wall_s": wall_s}
+        for name, p in self.participants.items():
+            monitor = getattr(p, "monitor", None)
+            if monitor is not None:
+                row.update({f"{name}/{k}": v for k, v in monitor().items()})
+        results.append(row)
+        if vtk and self.window % self.output.vtk_every == 0:
+            for name, series in vtk.items():
+                data = self.participants[name].write_data()
+                series.write(
+                    self.window,
+                    self.participants[name].time,
+                    data.get(DISPLACEMENT, np.zeros_like(series.mesh.points)),
+                    data,
+                )
+
+    def _vtk_writers(self, directory: Path, keep_until: float | None) -> dict[str, VtkSeries]:
+        if not self.output.vtk:
+            return {}
+        return {
+            name: VtkSeries(directory, name, p.interface(), keep_until)
+            for name, p in self.participants.items()
+        }
+
+    # ----------------------------------------------------------------- checkpoints
+    def _checkpoint(self, path: Path) -> None:
+        write_checkpoint(
+            path,
+            {"window": self.window},
+            {name: p.save_state() for name, p in self.participants.items()},
+        )
+
+    def _resume(self, path: Path) -> None:
+        if not path.exists():
+            raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
+        loop_state, states = read_checkpoint(path)
+        self.window = int(loop_state["window"])
+        for name, p in self.participants.items():
+            if name not in states:
+                raise ResumeError(f"{path}: holds no state for participant '{name}'")
+            p.load_state(states[name])

@@ -1,0 +1,81 @@
+"""The contract between the coupling loop and the solvers.
+
+Modelled on preCICE's ``Participant`` (read data, solve a window, write data, checkpoint
+queries): the loop drives any solver that implements this protocol and never imports a solver's
+libraries. What crosses the boundary: numpy arrays on an :class:`InterfaceMesh`.
+
+A window goes ``read_data -> solve(dt) -> write_data``. Implicit coupling stores a checkpoint at
+the start of the window and restores it before solving the window again with new data.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+# Names of exchanged fields (all on interface points, global frame, SI units).
+DISPLACEMENT = "displacement"  # (n, 3) m, from the reference configuration
+VELOCITY = "velocity"  # (n, 3) m/s
+FORCE = "force"  # (n, 3) N, nodal forces (conservative: they sum to the total force)
+PRESSURE = "pressure"  # (n,) Pa, net follower pressure (+z face minus -z face sign convention)
+
+State = Mapping[str, NDArray | float | int]
+
+
+@dataclass(frozen=True)
+class InterfaceMesh:
+    """Reference geometry of a participant's coupling interface."""
+
+    points: NDArray[np.float64]  # (n, 3)
+    cells: NDArray[np.int64]  # (m, k) indices into points
+    cell_type: str  # meshio name: "quad9", "quad", "triangle", ...
+
+    def __post_init__(self) -> None:
+        assert self.points.ndim == 2 and self.points.shape[1] == 3
+        assert self.cells.ndim == 2 and self.cells.max(initial=-1) < len(self.points)
+
+
+@runtime_checkable
+class Participant(Protocol):
+    """A solver the coupling loop can drive."""
+
+    name: str
+
+    @property
+    def time(self) -> float:
+        """End time of the last solved (or restored) window."""
+        ...
+
+    def interface(self) -> InterfaceMesh: ...
+
+    def read_data(self, data: Mapping[str, NDArray]) -> None:
+        """Receive the other side's data for the next ``solve`` (e.g. ``{"force": f}``)."""
+        ...
+
+    def solve(self, dt: float) -> None:
+        """Solve the window [time, time + dt] with the data read; afterwards time += dt."""
+        ...
+
+    def write_data(self) -> dict[str, NDArray]:
+        """The window-end values this participant sends (e.g. displacement, velocity)."""
+        ...
+
+    def store_checkpoint(self) -> None:
+        """Copy the current state aside; later changes of the live state must not touch it."""
+        ...
+
+    def restore_checkpoint(self) -> None:
+        """Return to the stored state (time included) so the window can be solved again."""
+        ...
+
+    def save_state(self) -> dict[str, NDArray | float | int]:
+        """Everything needed to continue a killed run bit-for-bit (written to checkpoint files)."""
+        ...
+
+    def load_state(self, state: State) -> None: ...
+
+    def finalize(self) -> None: ...

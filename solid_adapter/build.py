@@ -1,0 +1,119 @@
+"""Case -> shell model, participant, and the stand-alone analyses (static, modal)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import GeometryKind
+
+from .geometry import build_layout
+from .mesh import build_mesh
+from .participant import ShellParticipant, StaticLoads
+from .piezo import DriveSignal
+from .shell import NDOF, ShellModel
+from .solvers import (
+    ModalResult,
+    NewtonSettings,
+    TimeIntegrator,
+    make_integrator,
+    modal_analysis,
+    solve_static,
+)
+
+
+def build_shell_model(case: Case) -> ShellModel:
+    layout = build_layout(case)
+    mesh = build_mesh(layout, case.mesh.level, case.mesh.elements_length, case.mesh.elements_width)
+    return ShellModel(layout, mesh)
+
+
+def has_actuators(case: Case) -> bool:
+    return case.geometry.kind is not GeometryKind.RECTANGLE
+
+
+def newton_settings(case: Case) -> NewtonSettings:
+    return NewtonSettings(case.analysis.newton_tolerance, case.analysis.max_newton_iterations)
+
+
+def static_loads(case: Case, model: ShellModel) -> StaticLoads:
+    edge = model.edge_load(model.layout.length_m, case.loads.tip_force_n, case.loads.tip_moment_nm)
+    return StaticLoads(edge=edge, pressure_pa=case.loads.pressure_pa)
+
+
+def rayleigh_damping(case: Case, model: ShellModel) -> sp.spmatrix | None:
+    a, b = case.analysis.rayleigh_alpha_per_s, case.analysis.rayleigh_beta_s
+    if a == 0 and b == 0:
+        return None
+    K0 = model.internal(model.zero_state(), np.zeros(2))[1]
+    return a * model.mass + b * K0
+
+
+def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
+    a = case.analysis
+    return make_integrator(
+        a.integrator.value,
+        model,
+        a.rho_infinity,
+        rayleigh_damping(case, model),
+        newton_settings(case),
+    )
+
+
+def build_shell_participant(case: Case, model: ShellModel | None = None) -> ShellParticipant:
+    model = model or build_shell_model(case)
+    if has_actuators(case):
+        volts = DriveSignal.from_case(case).volts
+    else:
+
+        def volts(t: float) -> NDArray:
+            return np.zeros(2)
+
+    return ShellParticipant(model, build_integrator(case, model), volts, static_loads(case, model))
+
+
+@dataclass(frozen=True)
+class StaticResult:
+    x: NDArray
+    tip_displacement_m: NDArray
+    history: NDArray  # (steps, 4): lambda, ux, uy, uz at the tip
+
+
+def run_static(case: Case, model: ShellModel | None = None) -> StaticResult:
+    model = model or build_shell_model(case)
+    loads = static_loads(case, model)
+    static_volts = np.array(case.actuation.static_volts) if has_actuators(case) else np.zeros(2)
+    tip = model.mesh.nearest_node(*model.layout.tip_point)
+    history = []
+
+    def load_fn(lam: float, x: NDArray, tangent: bool):
+        f = lam * loads.edge
+        if loads.pressure_pa == 0:
+            return f, None
+        p = np.full(model.n_nodes, lam * loads.pressure_pa)
+        fp, Kp = model.pressure_load(x, p, tangent)
+        return f + fp, Kp
+
+    def record(k: int, lam: float, x: NDArray) -> None:
+        history.append([lam, *x.reshape(-1, NDOF)[tip, :3]])
+
+    x = solve_static(
+        model,
+        load_fn,
+        lambda lam: lam * static_volts,
+        case.analysis.load_steps,
+        newton_settings(case),
+        record,
+    )
+    return StaticResult(
+        x=x, tip_displacement_m=x.reshape(-1, NDOF)[tip, :3].copy(), history=np.array(history)
+    )
+
+
+def run_dry_modal(case: Case, model: ShellModel | None = None) -> ModalResult:
+    model = model or build_shell_model(case)
+    return modal_analysis(model, case.analysis.num_modes)

@@ -1,0 +1,435 @@
+"""Plate geometries: the parametric fish planform (three presets), the seed's beam model and a
+plain rectangle, each resolved into a :class:`PlateLayout` (outline, laminate regions, clamp).
+
+Coordinates: x along the body (nose at x = 0, tail at x = L), y across the plate (vertical in the
+tank), z normal to the plate (the swing direction). The outline is symmetric about y = 0.
+
+The fish outline is built from the seed's parameters (Tables 3.4, 4.1, 5.2, 5.6): body length,
+max height, peduncle height, caudal fin height. The text gives no drawing, so the shape between
+them is an assumption documented in docs/geometry.md: an elliptic blunt head up to
+``head_length_m``, a constant-height trunk, a cosine taper to the peduncle at ``peduncle_x_m``
+and a straight-edged caudal fin flaring linearly to the trailing edge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fsi_orchestrator.case import Case, CaseError
+from fsi_orchestrator.case.schema import ActuatorSides, GeometryKind, HeadCondition
+
+from .materials import (
+    CFRP,
+    MFC,
+    MFC_BORDER,
+    STEEL_HEAD_WEIGHT,
+    Material,
+    PiezoConstants,
+    Section,
+    stack,
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FishParameters:
+    """Every fish dimension, SI. Presets below; case keys override single entries."""
+
+    body_length_m: float
+    max_height_m: float
+    peduncle_height_m: float
+    caudal_fin_height_m: float
+    head_length_m: float
+    taper_start_x_m: float
+    peduncle_x_m: float
+    nose_height_fraction: float
+    thickness_m: float  # CFRP core
+    mfc_thickness_m: float
+    actuator_length_m: float
+    actuator_width_m: float
+    active_length_m: float
+    active_width_m: float
+    actuator_start_x_m: float
+    head_weight_radius_m: float
+    head_weight_thickness_m: float
+    head_weight_x_m: float | None = None  # default: radius + 3 mm
+
+
+_MM = 1e-3
+FISH_PRESETS = {
+    # Tables 3.4 / 4.1: L 167, H 55, peduncle 30, fin 50, CFRP 0.2, MFC 112 x 40 (active 85 x 28),
+    # head weight r 2.5 mm, 2.5 mm thick (Table 3.5).
+    "original": FishParameters(
+        body_length_m=167 * _MM,
+        max_height_m=55 * _MM,
+        peduncle_height_m=30 * _MM,
+        caudal_fin_height_m=50 * _MM,
+        head_length_m=30 * _MM,
+        taper_start_x_m=112 * _MM,
+        peduncle_x_m=140 * _MM,
+        nose_height_fraction=0.75,
+        thickness_m=0.2 * _MM,
+        mfc_thickness_m=0.3 * _MM,
+        actuator_length_m=112 * _MM,
+        actuator_width_m=40 * _MM,
+        active_length_m=85 * _MM,
+        active_width_m=28 * _MM,
+        actuator_start_x_m=3 * _MM,
+        head_weight_radius_m=2.5 * _MM,
+        head_weight_thickness_m=2.5 * _MM,
+    ),
+    # Table 5.2: peduncle 3, fin 60, head weight r 7, max height 64, same MFC, CFRP 0.2.
+    "serial": FishParameters(
+        body_length_m=167 * _MM,
+        max_height_m=64 * _MM,
+        peduncle_height_m=3 * _MM,
+        caudal_fin_height_m=60 * _MM,
+        head_length_m=30 * _MM,
+        taper_start_x_m=112 * _MM,
+        peduncle_x_m=140 * _MM,
+        nose_height_fraction=0.75,
+        thickness_m=0.2 * _MM,
+        mfc_thickness_m=0.3 * _MM,
+        actuator_length_m=112 * _MM,
+        actuator_width_m=40 * _MM,
+        active_length_m=85 * _MM,
+        active_width_m=28 * _MM,
+        actuator_start_x_m=3 * _MM,
+        head_weight_radius_m=7 * _MM,
+        head_weight_thickness_m=2.5 * _MM,
+    ),
+    # Table 5.6: peduncle 3, fin 20, head weight r 7, max height 64, MFC 103 x 35, CFRP 0.1.
+    "integrative": FishParameters(
+        body_length_m=167 * _MM,
+        max_height_m=64 * _MM,
+        peduncle_height_m=3 * _MM,
+        caudal_fin_height_m=20 * _MM,
+        head_length_m=30 * _MM,
+        taper_start_x_m=112 * _MM,
+        peduncle_x_m=140 * _MM,
+        nose_height_fraction=0.75,
+        thickness_m=0.1 * _MM,
+        mfc_thickness_m=0.3 * _MM,
+        actuator_length_m=103 * _MM,
+        actuator_width_m=35 * _MM,
+        active_length_m=85 * _MM,
+        active_width_m=28 * _MM,
+        actuator_start_x_m=3 * _MM,
+        head_weight_radius_m=7 * _MM,
+        head_weight_thickness_m=2.5 * _MM,
+    ),
+}
+
+# Table 3.2: MFC 85 x 7 x 0.3 on CFRP 87 x 8 x 0.2, clamped-free.
+BEAM_DEFAULTS = dict(
+    length_m=87 * _MM,
+    width_m=8 * _MM,
+    thickness_m=0.2 * _MM,
+    mfc_thickness_m=0.3 * _MM,
+    actuator_length_m=85 * _MM,
+    actuator_width_m=7 * _MM,
+    # The seed (SOLID186) clamps the end face of the CFRP; the MFC's own end is
+    # not held, and shear lag frees it over a length of the order of the
+    # laminate thickness (0.3-0.5 mm). A shell clamps every layer at once, so
+    # the MFC is set back 0.4 mm from the clamp (calibrated inside that range on
+    # Table 3.3, see docs/geometry.md). With 0 the first mode is 28.5 Hz.
+    actuator_start_x_m=0.4 * _MM,
+)
+
+
+def fish_height(p: FishParameters, x: NDArray) -> NDArray:
+    """Local plate height h(x) of the fish outline (|y| <= h/2)."""
+    x = np.asarray(x, dtype=float)
+    H, f = p.max_height_m, p.nose_height_fraction
+    s_head = np.clip(x / p.head_length_m, 0.0, 1.0)
+    head = H * (f + (1 - f) * np.sqrt(np.clip(1 - (1 - s_head) ** 2, 0.0, 1.0)))
+    s_taper = np.clip((x - p.taper_start_x_m) / (p.peduncle_x_m - p.taper_start_x_m), 0.0, 1.0)
+    taper = H - (H - p.peduncle_height_m) * (1 - np.cos(np.pi * s_taper)) / 2
+    s_fin = np.clip((x - p.peduncle_x_m) / (p.body_length_m - p.peduncle_x_m), 0.0, 1.0)
+    fin = p.peduncle_height_m + (p.caudal_fin_height_m - p.peduncle_height_m) * s_fin
+    return np.where(
+        x < p.head_length_m,
+        head,
+        np.where(x < p.taper_start_x_m, H, np.where(x < p.peduncle_x_m, taper, fin)),
+    )
+
+
+@dataclass(frozen=True)
+class Rect:
+    x0: float
+    x1: float
+    half_width: float
+
+    def contains(self, x: NDArray, y: NDArray) -> NDArray:
+        return (x >= self.x0) & (x <= self.x1) & (np.abs(y) <= self.half_width)
+
+
+@dataclass(frozen=True)
+class Disk:
+    xc: float
+    radius: float
+
+    def contains(self, x: NDArray, y: NDArray) -> NDArray:
+        return (x - self.xc) ** 2 + y**2 <= self.radius**2
+
+
+@dataclass(frozen=True, kw_only=True)
+class PlateLayout:
+    """Everything the shell needs to know about the plate, independent of the mesh."""
+
+    kind: GeometryKind
+    length_m: float
+    height_fn: object  # callable x -> h(x)
+    breakpoints_m: tuple[float, ...]  # x positions the mesh must have element edges at
+    # (half-width, x0, x1): lines y = +-half-width the mesh follows exactly for x0 <= x <= x1
+    y_breaks: tuple[tuple[float, float, float], ...] = ()
+    sections: tuple[Section, ...]  # laminate per region code
+    region_rules: tuple[tuple[str, object], ...]  # (name, shape) flags used by region()
+    clamp_x_m: float | None  # nodes with x <= clamp_x are clamped; None: free
+    head_weight_mass_kg: float = 0.0
+    description: str = ""
+
+    def height(self, x: NDArray) -> NDArray:
+        return self.height_fn(x)  # type: ignore[operator]
+
+    def region(self, x: NDArray, y: NDArray) -> NDArray:
+        """Region code per point: bit k set when point lies in region_rules[k]."""
+        code = np.zeros(np.shape(x), dtype=np.int64)
+        for k, (_, shape) in enumerate(self.region_rules):
+            code |= shape.contains(x, y).astype(np.int64) << k  # type: ignore[attr-defined]
+        return code
+
+    @property
+    def tip_point(self) -> tuple[float, float]:
+        """Tail tip / free-edge mid-point: trailing edge at y = 0."""
+        return (self.length_m, 0.0)
+
+
+def _check(ok: bool, key: str, message: str) -> None:
+    if not ok:
+        raise CaseError(f"case.toml: {key} {message}")
+
+
+def resolve_fish(case: Case) -> FishParameters:
+    g = case.geometry
+    params = FISH_PRESETS[g.preset.value]
+    given = {
+        f.name: getattr(g, f.name)
+        for f in fields(FishParameters)
+        if hasattr(g, f.name) and getattr(g, f.name) is not None
+    }
+    p = replace(params, **given)
+    L = p.body_length_m
+    _check(
+        p.head_length_m < p.taper_start_x_m,
+        "geometry.head_length_m",
+        f"must be < geometry.taper_start_x_m ({p.taper_start_x_m:g}), got {p.head_length_m:g}",
+    )
+    _check(
+        p.taper_start_x_m < p.peduncle_x_m,
+        "geometry.taper_start_x_m",
+        f"must be < geometry.peduncle_x_m ({p.peduncle_x_m:g}), got {p.taper_start_x_m:g}",
+    )
+    _check(
+        p.peduncle_x_m < L,
+        "geometry.peduncle_x_m",
+        f"must be < geometry.body_length_m ({L:g}), got {p.peduncle_x_m:g}",
+    )
+    _check(
+        p.peduncle_height_m <= p.max_height_m,
+        "geometry.peduncle_height_m",
+        f"must be <= geometry.max_height_m ({p.max_height_m:g}), got {p.peduncle_height_m:g}",
+    )
+    _check(
+        p.active_length_m <= p.actuator_length_m,
+        "geometry.active_length_m",
+        f"must be <= geometry.actuator_length_m ({p.actuator_length_m:g})",
+    )
+    _check(
+        p.active_width_m <= p.actuator_width_m,
+        "geometry.active_width_m",
+        f"must be <= geometry.actuator_width_m ({p.actuator_width_m:g})",
+    )
+    x_end = p.actuator_start_x_m + p.actuator_length_m
+    _check(
+        x_end < L,
+        "geometry.actuator_length_m",
+        f"ends at x = {x_end:g} m, beyond the body length {L:g} m",
+    )
+    xs = np.linspace(p.actuator_start_x_m, x_end, 200)
+    h = fish_height(p, xs)
+    bad = h < p.actuator_width_m
+    _check(
+        not bad.any(),
+        "geometry.actuator_width_m",
+        f"({p.actuator_width_m:g} m) does not fit the planform: the plate is only "
+        f"{h[bad].min() if bad.any() else 0:.4g} m high at x = "
+        f"{xs[bad][0] if bad.any() else 0:.4g} m (move geometry.actuator_start_x_m or change "
+        f"the outline)",
+    )
+    return p
+
+
+def _fish_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
+    p = resolve_fish(case)
+    core = _core_material(case, default="fsi")
+    x_weight = p.head_weight_x_m if p.head_weight_x_m is not None else p.head_weight_radius_m + 3e-3
+    weight = Disk(xc=x_weight, radius=p.head_weight_radius_m)
+    _check(
+        weight.xc - weight.radius >= 0,
+        "geometry.head_weight_x_m",
+        "places the head weight ahead of the nose",
+    )
+    package = Rect(
+        p.actuator_start_x_m, p.actuator_start_x_m + p.actuator_length_m, p.actuator_width_m / 2
+    )
+    x_active = p.actuator_start_x_m + (p.actuator_length_m - p.active_length_m) / 2
+    active = Rect(x_active, x_active + p.active_length_m, p.active_width_m / 2)
+    sides = _sides(case, ActuatorSides.BOTH)
+    tw = p.head_weight_thickness_m
+
+    sections = []
+    for code in range(8):  # bit 0: package, bit 1: active area, bit 2: head weight
+        in_package, in_active, in_weight = bool(code & 1), bool(code & 2), bool(code & 4)
+        outer: dict[int, list[tuple[Material, float, bool]]] = {0: [], 1: []}
+        for side in (0, 1):
+            if in_package and side in sides:
+                outer[side].append((MFC if in_active else MFC_BORDER, p.mfc_thickness_m, in_active))
+            if in_weight and tw > 0:
+                outer[side].append((STEEL_HEAD_WEIGHT, tw / 2, False))
+        sections.append(Section.from_layers(stack(core, p.thickness_m, outer), piezo))
+
+    clamp = _clamp_x(case, default=weight.xc + weight.radius)
+    breaks = {
+        0.0,
+        p.body_length_m,
+        package.x0,
+        package.x1,
+        active.x0,
+        active.x1,
+        p.head_length_m,
+        p.taper_start_x_m,
+        p.peduncle_x_m,
+        weight.xc + weight.radius,
+    }
+    if clamp is not None:
+        breaks.add(clamp)
+    mass = STEEL_HEAD_WEIGHT.density_kg_m3 * np.pi * weight.radius**2 * tw
+    return PlateLayout(
+        kind=GeometryKind.FISH,
+        length_m=p.body_length_m,
+        height_fn=lambda x: fish_height(p, x),
+        breakpoints_m=tuple(sorted(breaks)),
+        sections=tuple(sections),
+        region_rules=(("actuator", package), ("active", active), ("head_weight", weight)),
+        y_breaks=(
+            (active.half_width, active.x0, active.x1),
+            (package.half_width, package.x0, package.x1),
+        ),
+        clamp_x_m=clamp,
+        head_weight_mass_kg=float(mass),
+        description=f"fish preset {case.geometry.preset.value}",
+    )
+
+
+def _beam_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
+    g = case.geometry
+    val = {k: getattr(g, k) if getattr(g, k) is not None else v for k, v in BEAM_DEFAULTS.items()}
+    L, W = val["length_m"], val["width_m"]
+    core = _core_material(case, default="beam")
+    mfc = Rect(
+        val["actuator_start_x_m"],
+        val["actuator_start_x_m"] + val["actuator_length_m"],
+        val["actuator_width_m"] / 2,
+    )
+    _check(
+        mfc.x1 <= L + 1e-12,
+        "geometry.actuator_length_m",
+        f"ends at x = {mfc.x1:g} m, beyond geometry.length_m = {L:g} m",
+    )
+    _check(
+        val["actuator_width_m"] <= W + 1e-12,
+        "geometry.actuator_width_m",
+        f"must be <= geometry.width_m ({W:g})",
+    )
+    sides = _sides(case, ActuatorSides.TOP)
+    sections = []
+    for code in range(2):
+        outer = {
+            s: [(MFC, val["mfc_thickness_m"], True)] if (code and s in sides) else []
+            for s in (0, 1)
+        }
+        sections.append(Section.from_layers(stack(core, val["thickness_m"], outer), piezo))
+    return PlateLayout(
+        kind=GeometryKind.BEAM,
+        length_m=L,
+        height_fn=lambda x: np.full(np.shape(x), W),
+        breakpoints_m=tuple(sorted({0.0, L, mfc.x0, min(mfc.x1, L)})),
+        sections=tuple(sections),
+        region_rules=(("actuator", mfc),),
+        clamp_x_m=_clamp_x(case, default=0.0),
+        y_breaks=((mfc.half_width, mfc.x0, mfc.x1),) if mfc.half_width < W / 2 else (),
+        description="seed beam model (Table 3.2)",
+    )
+
+
+def _rectangle_layout(case: Case) -> PlateLayout:
+    g, m = case.geometry, case.material
+    assert g.length_m and g.width_m and g.thickness_m  # checked by the loader
+    mat = Material.isotropic(
+        "rectangle",
+        m.youngs_modulus_pa,
+        m.poisson_ratio,  # type: ignore[arg-type]
+        m.density_kg_m3,
+    )  # type: ignore[arg-type]
+    t = g.thickness_m
+    section = Section.from_layers(stack(mat, t, {}), None)
+    W = g.width_m
+    return PlateLayout(
+        kind=GeometryKind.RECTANGLE,
+        length_m=g.length_m,
+        height_fn=lambda x: np.full(np.shape(x), W),
+        breakpoints_m=(0.0, g.length_m),
+        sections=(section,),
+        region_rules=(),
+        clamp_x_m=_clamp_x(case, default=0.0),
+        description="isotropic rectangle",
+    )
+
+
+def _core_material(case: Case, default: str) -> Material:
+    m = case.material
+    base = CFRP[m.cfrp.value if m.cfrp is not None else default]
+    if m.youngs_modulus_pa is None and m.poisson_ratio is None and m.density_kg_m3 is None:
+        return base
+    e = m.youngs_modulus_pa or base.e1_pa
+    nu = m.poisson_ratio if m.poisson_ratio is not None else base.nu12
+    rho = m.density_kg_m3 or base.density_kg_m3
+    return Material.isotropic(base.name + " (overridden)", e, nu, rho)
+
+
+def _sides(case: Case, default: ActuatorSides) -> tuple[int, ...]:
+    sides = case.geometry.actuator_sides or default
+    return (0, 1) if sides is ActuatorSides.BOTH else (0,)
+
+
+def _clamp_x(case: Case, default: float) -> float | None:
+    if case.boundary.head is HeadCondition.FREE:
+        return None
+    return case.boundary.clamp_length_m if case.boundary.clamp_length_m is not None else default
+
+
+def piezo_constants(case: Case) -> PiezoConstants:
+    a = case.actuation
+    return PiezoConstants(a.d33_m_per_v, a.d31_m_per_v, a.electrode_spacing_m)
+
+
+def build_layout(case: Case) -> PlateLayout:
+    piezo = piezo_constants(case)
+    if case.geometry.kind is GeometryKind.FISH:
+        return _fish_layout(case, piezo)
+    if case.geometry.kind is GeometryKind.BEAM:
+        return _beam_layout(case, piezo)
+    return _rectangle_layout(case)

@@ -1,0 +1,139 @@
+"""The shell as a coupling participant (implements fsi_orchestrator.participant.Participant).
+
+Interface mesh = the mid-surface (all 9-node quad DOF locations). Reads nodal forces ("force",
+dead within a window) and/or a net follower pressure ("pressure"); writes displacement and
+velocity at the window end. Checkpoints are copies of the integrator state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from fsi_orchestrator.participant import (
+    DISPLACEMENT,
+    FORCE,
+    PRESSURE,
+    VELOCITY,
+    InterfaceMesh,
+    State,
+)
+
+from .shell import NDOF, ShellModel
+from .solvers import DynamicState, TimeIntegrator
+
+
+@dataclass(frozen=True)
+class StaticLoads:
+    """Case loads that do not come from the coupling."""
+
+    edge: NDArray  # generalised load vector of the tip force / moment
+    pressure_pa: float = 0.0  # uniform follower pressure
+
+
+class ShellParticipant:
+    name = "shell"
+
+    def __init__(
+        self,
+        model: ShellModel,
+        integrator: TimeIntegrator,
+        volts,
+        loads: StaticLoads,
+        t0: float = 0.0,
+    ) -> None:
+        self.model = model
+        self.volts = volts
+        self.loads = loads
+        self.integrator = integrator
+        self._force = np.zeros((model.n_nodes, 3))
+        self._pressure = np.zeros(model.n_nodes)
+        self.tip_node = model.mesh.nearest_node(*model.layout.tip_point)
+        self.state = self.integrator.initial_state(t0, self.external_load, volts)
+        self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
+
+    # --------------------------------------------------------------- loads
+    def external_load(
+        self, t: float, x: NDArray, tangent: bool
+    ) -> tuple[NDArray, sp.spmatrix | None]:
+        f = self.loads.edge + self.model.nodal_force_load(self._force)
+        p = self._pressure + self.loads.pressure_pa
+        if not np.any(p):
+            return f, None
+        fp, Kp = self.model.pressure_load(
+            x, np.broadcast_to(p, (self.model.n_nodes,)).copy(), tangent
+        )
+        return f + fp, Kp
+
+    # --------------------------------------------------------------- Participant protocol
+    @property
+    def time(self) -> float:
+        return self.state.t
+
+    def interface(self) -> InterfaceMesh:
+        return InterfaceMesh(
+            points=self.model.reference_points.copy(),
+            cells=self.model.mesh.element_nodes.copy(),
+            cell_type="quad9",
+        )
+
+    def read_data(self, data: Mapping[str, NDArray]) -> None:
+        if FORCE in data:
+            self._force = np.asarray(data[FORCE], dtype=float).reshape(self.model.n_nodes, 3)
+        if PRESSURE in data:
+            self._pressure = np.asarray(data[PRESSURE], dtype=float).reshape(self.model.n_nodes)
+
+    def solve(self, dt: float) -> None:
+        self.state = self.integrator.step(self.state, dt, self.external_load, self.volts)
+
+    def write_data(self) -> dict[str, NDArray]:
+        n = self.model.n_nodes
+        return {
+            DISPLACEMENT: self.state.x.reshape(n, NDOF)[:, :3].copy(),
+            VELOCITY: self.state.v.reshape(n, NDOF)[:, :3].copy(),
+        }
+
+    def monitor(self) -> dict[str, NDArray | float]:
+        """Quantities recorded every window: tail-tip (free-edge mid-point) displacement."""
+        return {
+            "tip_displacement_m": self.state.x.reshape(-1, NDOF)[self.tip_node, :3].copy(),
+            "newton_iterations": float(self.integrator.newton_iterations),
+        }
+
+    def store_checkpoint(self) -> None:
+        self._checkpoint = (self.state.copy(), self._force.copy(), self._pressure.copy())
+
+    def restore_checkpoint(self) -> None:
+        assert self._checkpoint is not None, "restore_checkpoint before store_checkpoint"
+        state, force, pressure = self._checkpoint
+        self.state, self._force, self._pressure = state.copy(), force.copy(), pressure.copy()
+
+    def save_state(self) -> dict[str, NDArray | float | int]:
+        s = self.state
+        return {
+            "t": s.t,
+            "x": s.x.copy(),
+            "v": s.v.copy(),
+            "a": s.a.copy(),
+            "f_int": s.f_int.copy(),
+            "f_ext": s.f_ext.copy(),
+            "force": self._force.copy(),
+            "pressure": self._pressure.copy(),
+            "newton_iterations": self.integrator.newton_iterations,
+        }
+
+    def load_state(self, state: State) -> None:
+        self.state = DynamicState(
+            float(state["t"]),
+            *(np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext")),
+        )
+        self._force = np.array(state["force"], dtype=float)
+        self._pressure = np.array(state["pressure"], dtype=float)
+        self.integrator.newton_iterations = int(state["newton_iterations"])
+
+    def finalize(self) -> None:
+        pass

@@ -1,0 +1,425 @@
+"""Static (load stepping + Newton), dynamic (generalized-alpha / Newmark + Newton) and modal
+analyses of a :class:`~solid_adapter.shell.ShellModel`.
+
+Generalized-alpha (Chung & Hulbert 1993) in its "generalized trapezoidal" nonlinear form:
+
+    M a_{n+1-am} + C v_{n+1-af} + (1-af) f_int(x_{n+1}) + af f_int(x_n) = f_{n+1-af}
+
+with Newmark updates for v, a and the parameters from rho_inf. rho_inf = 1 is the trapezoidal
+rule (no numerical damping, energy conserving for linear systems).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from .shell import NDOF, MixedNewtonInternal, ShellModel
+
+LoadFn = Callable[[float, NDArray, bool], tuple[NDArray, sp.spmatrix | None]]
+VoltFn = Callable[[float], NDArray]
+
+
+class SolverError(RuntimeError):
+    """The structural solve failed (no convergence, NaN); the message says where and why."""
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    tolerance: float = 1e-8
+    max_iterations: int = 30
+
+
+def dof_scale(model: ShellModel) -> NDArray:
+    """Per-DOF scale making translations (in plate lengths) and rotations (rad) comparable."""
+    s = np.ones((model.n_nodes, NDOF))
+    s[:, :3] = 1.0 / model.layout.length_m
+    return s.ravel()
+
+
+def solve_linear(
+    K: sp.spmatrix, r: NDArray, free: NDArray, rank_one: tuple[NDArray, NDArray] | None = None
+) -> NDArray:
+    """Solve (K + u w^T) dx = r on the free DOFs (Sherman-Morrison for the optional u w^T)."""
+    dx = np.zeros_like(r)
+    lu = spla.splu(sp.csc_matrix(K[free][:, free]))
+    y = lu.solve(r[free])
+    if rank_one is not None:
+        u, w = rank_one[0][free], rank_one[1][free]
+        z = lu.solve(u)
+        y = y - z * (w @ y) / (1.0 + w @ z)
+    dx[free] = y
+    return dx
+
+
+# residual(x, tangent) -> (r, K) or (r, K, (u, w)) with the tangent K + u w^T
+# Line search only when the full step makes things far worse: an energy-directional criterion
+# (|g(1)| < 0.5 |g(0)|) cuts the good first step of thin plates, whose membrane energy spikes.
+LINE_SEARCH_RATIO = 1e6
+ResidualFn = Callable[[NDArray, bool], tuple]
+
+
+def newton(
+    residual: ResidualFn, x0: NDArray, model: ShellModel, settings: NewtonSettings, where: str
+) -> tuple[NDArray, int]:
+    """Solve residual(x) = 0 on the free DOFs.
+
+    Converged when the scaled increment falls below tolerance times the first increment of this
+    solve (residual norms stall near 1e-8 because of the membrane/bending stiffness ratio, see
+    the notes). A secant line search on g(s) = dx . r(x + s dx) tames the first iterates of thin
+    plates at large rotation, whose membrane energy makes plain Newton overshoot.
+    """
+    x = x0.copy()
+    scale = dof_scale(model)
+    r, K, *update = residual(x, True)
+    first = None
+    for it in range(1, settings.max_iterations + 1):
+        if not np.all(np.isfinite(r)):
+            raise SolverError(f"shell: NaN in the residual {where} (Newton iteration {it})")
+        dx = solve_linear(K, -r, model.free_dofs, update[0] if update else None)
+        if not np.all(np.isfinite(dx)):
+            raise SolverError(
+                f"shell: singular tangent {where} (Newton iteration {it}); is the "
+                "plate clamped (boundary.head)?"
+            )
+        step, r, K, update = _line_search(residual, x, dx, r)
+        x += step * dx
+        size = step * np.max(np.abs(dx * scale))
+        first = size if first is None else first
+        if size <= settings.tolerance * max(first, 1e-300) or size < 1e-15:
+            return x, it
+    raise SolverError(
+        f"shell: Newton did not converge {where} in {settings.max_iterations} "
+        f"iterations (last scaled increment {size:.2e}); reduce the load or time "
+        "step (analysis.load_steps, time.steps_per_period)"
+    )
+
+
+def _line_search(
+    residual: ResidualFn,
+    x: NDArray,
+    dx: NDArray,
+    r0: NDArray,
+    ratio: float = LINE_SEARCH_RATIO,
+    max_trials: int = 6,
+) -> tuple[float, NDArray, sp.spmatrix, list]:
+    g0 = float(dx @ r0)
+    r1, K1, *update = residual(x + dx, True)
+    g1 = float(dx @ r1)
+    if not np.isfinite(g1) or g0 >= 0 or abs(g1) <= ratio * abs(g0):
+        return 1.0, r1, K1, update
+    s_prev, g_prev, s, g = 0.0, g0, 1.0, g1
+    for _ in range(max_trials):
+        s_new = s - g * (s - s_prev) / (g - g_prev) if g != g_prev else 0.5 * s
+        s_new = float(np.clip(s_new, 0.1 * s, 2.0 * s if g < 0 else s))
+        s_prev, g_prev, s = s, g, s_new
+        r_s = residual(x + s * dx, False)[0]
+        g = float(dx @ r_s)
+        if np.isfinite(g) and abs(g) <= ratio * abs(g0):
+            break
+    r_s, K_s, *update = residual(x + s * dx, True)
+    return s, r_s, K_s, update
+
+
+# --------------------------------------------------------------------------- static
+
+
+def solve_static(
+    model: ShellModel,
+    loads: LoadFn,
+    volts: VoltFn,
+    steps: int,
+    settings: NewtonSettings = NewtonSettings(),
+    callback: Callable[[int, float, NDArray], None] | None = None,
+) -> NDArray:
+    """Load stepping on lambda = k/steps; ``loads(lam, x, tangent)`` and ``volts(lam)`` scale
+    with lambda."""
+    x = model.zero_state()
+    for k in range(1, steps + 1):
+        lam = k / steps
+
+        internal = MixedNewtonInternal(model)
+
+        def residual(xx: NDArray, tangent: bool, lam: float = lam, internal=internal):
+            r, K = internal(xx, volts(lam), tangent)
+            f, Kf = loads(lam, xx, tangent)
+            return r - f, (K - Kf) if (K is not None and Kf is not None) else K
+
+        x, _ = newton(residual, x, model, settings, f"in load step {k}/{steps}")
+        if callback is not None:
+            callback(k, lam, x)
+    return x
+
+
+# --------------------------------------------------------------------------- dynamic
+
+
+@dataclass(frozen=True)
+class DynamicState:
+    t: float
+    x: NDArray
+    v: NDArray
+    a: NDArray
+    f_int: NDArray  # internal force at (x, volts(t))
+    f_ext: NDArray  # external force at (t, x)
+
+    def copy(self) -> DynamicState:
+        return replace(
+            self,
+            x=self.x.copy(),
+            v=self.v.copy(),
+            a=self.a.copy(),
+            f_int=self.f_int.copy(),
+            f_ext=self.f_ext.copy(),
+        )
+
+
+@dataclass(frozen=True)
+class AlphaParameters:
+    alpha_m: float
+    alpha_f: float
+    beta: float
+    gamma: float
+
+    @classmethod
+    def generalized_alpha(cls, rho_inf: float) -> AlphaParameters:
+        am = (2 * rho_inf - 1) / (rho_inf + 1)
+        af = rho_inf / (rho_inf + 1)
+        return cls(am, af, 0.25 * (1 - am + af) ** 2, 0.5 - am + af)
+
+    @classmethod
+    def newmark(cls) -> AlphaParameters:
+        return cls(0.0, 0.0, 0.25, 0.5)
+
+
+def make_integrator(
+    kind: str,
+    model: ShellModel,
+    rho_inf: float = 1.0,
+    damping: sp.spmatrix | None = None,
+    settings: NewtonSettings = NewtonSettings(),
+) -> TimeIntegrator:
+    """``kind``: "generalized-alpha", "newmark" or "energy-conserving"."""
+    if kind == "energy-conserving":
+        return EnergyConservingIntegrator(model, damping, settings)
+    params = (
+        AlphaParameters.newmark()
+        if kind == "newmark"
+        else AlphaParameters.generalized_alpha(rho_inf)
+    )
+    return GeneralizedAlphaIntegrator(model, params, damping, settings)
+
+
+class TimeIntegrator:
+    """One implicit step at a time; the caller owns the state (so checkpoints are trivial)."""
+
+    def __init__(
+        self,
+        model: ShellModel,
+        damping: sp.spmatrix | None = None,
+        settings: NewtonSettings = NewtonSettings(),
+    ) -> None:
+        self.model, self.C, self.settings = model, damping, settings
+        self.newton_iterations = 0
+
+    def initial_state(
+        self,
+        t0: float,
+        loads: LoadFn,
+        volts: VoltFn,
+        x0: NDArray | None = None,
+        v0: NDArray | None = None,
+    ) -> DynamicState:
+        """At rest in static equilibrium under the loads and voltages of t0 (the seed starts
+        from zero; a voltage offset switched on at t = 0 would only add a start-up transient),
+        unless x0 / v0 are given."""
+        m = self.model
+        if x0 is None:
+
+            def load_fn(lam: float, x: NDArray, tangent: bool):
+                f, K = loads(t0, x, tangent)
+                return lam * f, (lam * K if K is not None else None)
+
+            x0 = solve_static(m, load_fn, lambda lam: lam * volts(t0), 4, self.settings)
+        x = x0.copy()
+        v = np.zeros(m.ndof) if v0 is None else v0.copy()
+        f_int = m.internal(x, volts(t0), tangent=False)[0]
+        f_ext, _ = loads(t0, x, False)
+        rhs = f_ext - f_int - (self.C @ v if self.C is not None else 0.0)
+        a = np.zeros(m.ndof)
+        free = m.free_dofs
+        a[free] = spla.spsolve(sp.csc_matrix(m.mass[free][:, free]), rhs[free])
+        return DynamicState(t0, x, v, a, f_int, f_ext)
+
+    max_halvings = 4  # a window whose Newton fails is retried as 2, 4, ... 16 sub-steps
+
+    def step(
+        self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn, depth: int = 0
+    ) -> DynamicState:
+        """Advance by dt; if Newton fails, retry the same interval with halved sub-steps."""
+        try:
+            return self._step(s, dt, loads, volts)
+        except SolverError:
+            if depth >= self.max_halvings:
+                raise
+            half = self.step(s, dt / 2, loads, volts, depth + 1)
+            return self.step(half, dt / 2, loads, volts, depth + 1)
+
+    def _step(self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn) -> DynamicState:
+        raise NotImplementedError
+
+    def kinetic_energy(self, s: DynamicState) -> float:
+        return 0.5 * float(s.v @ (self.model.mass @ s.v))
+
+
+class GeneralizedAlphaIntegrator(TimeIntegrator):
+    def __init__(
+        self,
+        model: ShellModel,
+        params: AlphaParameters,
+        damping: sp.spmatrix | None = None,
+        settings: NewtonSettings = NewtonSettings(),
+    ) -> None:
+        super().__init__(model, damping, settings)
+        self.p = params
+
+    def _step(self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn) -> DynamicState:
+        p, m = self.p, self.model
+        t1 = s.t + dt
+        V1 = volts(t1)
+        internal = MixedNewtonInternal(m)
+        c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
+        c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
+
+        def kinematics(x1: NDArray) -> tuple[NDArray, NDArray]:
+            a1 = (x1 - s.x - dt * s.v) / (p.beta * dt * dt) - (1 - 2 * p.beta) / (2 * p.beta) * s.a
+            v1 = s.v + dt * ((1 - p.gamma) * s.a + p.gamma * a1)
+            return v1, a1
+
+        def residual(x1: NDArray, tangent: bool):
+            v1, a1 = kinematics(x1)
+            f_int, K = internal(x1, V1, tangent)
+            f_ext, Kf = loads(t1, x1, tangent)
+            r = m.mass @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
+            r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
+            if self.C is not None:
+                r += self.C @ ((1 - p.alpha_f) * v1 + p.alpha_f * s.v)
+            if not tangent:
+                return r, None
+            T = c_a * m.mass + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
+            if self.C is not None:
+                T = T + c_v * self.C
+            return r, T
+
+        x_pred = s.x.copy()
+        x_pred[m.fixed_dofs] = s.x[m.fixed_dofs]
+        x1, its = newton(residual, x_pred, m, self.settings, f"at t = {t1:.6g} s")
+        self.newton_iterations += its
+        v1, a1 = kinematics(x1)
+        f_int = m.internal(x1, V1, tangent=False)[0]
+        f_ext, _ = loads(t1, x1, False)
+        return DynamicState(t1, x1, v1, a1, f_int, f_ext)
+
+
+class EnergyConservingIntegrator(TimeIntegrator):
+    """Implicit midpoint rule with Gonzalez's discrete gradient of the strain energy:
+
+        M (v1 - v0)/dt + C v_mid + f_alg(x0, x1) = (f0 + f1)/2,   x1 - x0 = dt v_mid,
+        f_alg = grad Pi(x_mid) + [Pi(x1) - Pi(x0) - grad Pi(x_mid).dx] / (dx^T M dx) M dx,
+
+    so f_alg . dx = Pi(x1) - Pi(x0) exactly and, undamped and unloaded, the energy
+    1/2 v^T M v + Pi(x) is conserved to the Newton tolerance at any step size. The trapezoidal
+    rule (generalized-alpha with rho_inf = 1) instead pumps energy into the stiff membrane
+    modes once rotations are moderate (Kuhl & Crisfield 1999); this scheme cannot blow up.
+    Newton uses the midpoint tangent and drops the small rank-2 derivative of the correction.
+    """
+
+    def _step(self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn) -> DynamicState:
+        m = self.model
+        t1 = s.t + dt
+        V = volts(s.t + 0.5 * dt)
+        pi0 = m.strain_energy(s.x, V)
+        internal = MixedNewtonInternal(m)
+
+        def residual(x1: NDArray, tangent: bool):
+            dx = x1 - s.x
+            f_mid, K_mid = internal(s.x + 0.5 * dx, V, tangent)
+            Mdx = m.mass @ dx
+            denom = float(dx @ Mdx)
+            f_alg, c, w = f_mid, 0.0, None
+            if denom > 1e-300:
+                f1 = m.internal(x1, V, tangent=False)[0]
+                c = (m.strain_energy(x1, V) - pi0 - f_mid @ dx) / denom
+                f_alg = f_mid + c * Mdx
+                if tangent:  # dc/dx1
+                    w = (f1 - f_mid - 0.5 * (K_mid.T @ dx) - 2.0 * c * Mdx) / denom
+            f_ext, Kf = loads(t1, x1, tangent)
+            r = (2.0 / dt**2) * (Mdx - dt * (m.mass @ s.v)) + f_alg - 0.5 * (f_ext + s.f_ext)
+            if self.C is not None:
+                r += self.C @ (dx / dt)
+            if not tangent:
+                return r, None
+            T = (2.0 / dt**2 + c) * m.mass + 0.5 * K_mid
+            if Kf is not None:
+                T = T - 0.5 * Kf
+            if self.C is not None:
+                T = T + self.C / dt
+            return (r, T, (Mdx, w)) if w is not None else (r, T)
+
+        x1, its = newton(residual, s.x.copy(), m, self.settings, f"at t = {t1:.6g} s")
+        self.newton_iterations += its
+        v1 = 2.0 * (x1 - s.x) / dt - s.v
+        f_int = m.internal(x1, volts(t1), tangent=False)[0]
+        f_ext, _ = loads(t1, x1, False)
+        return DynamicState(t1, x1, v1, (v1 - s.v) / dt, f_int, f_ext)
+
+
+# --------------------------------------------------------------------------- modal
+
+
+@dataclass(frozen=True)
+class ModalResult:
+    frequencies_hz: NDArray
+    shapes: NDArray  # (num_modes, ndof), mass-normalised
+    rigid_modes: int
+
+
+def modal_analysis(
+    model: ShellModel,
+    num_modes: int,
+    stiffness: sp.spmatrix | None = None,
+    mass: sp.spmatrix | None = None,
+) -> ModalResult:
+    """Lowest elastic modes of K phi = w^2 M phi on the free DOFs (rigid modes dropped when the
+    plate is unsupported). ``stiffness``/``mass`` default to the reference tangent and the
+    structural mass (a fluid model may pass M + M_added)."""
+    K = stiffness if stiffness is not None else model.internal(model.zero_state(), np.zeros(2))[1]
+    M = mass if mass is not None else model.mass
+    free = model.free_dofs
+    rigid = 6 if model.layout.clamp_x_m is None else 0
+    Kff, Mff = sp.csc_matrix(K[free][:, free]), sp.csc_matrix(M[free][:, free])
+    k = num_modes + rigid
+    w2, vec = spla.eigsh(Kff, k=k, M=Mff, sigma=-1.0, which="LM")
+    order = np.argsort(w2)
+    w2, vec = w2[order][rigid:], vec[:, order][:, rigid:]
+    shapes = np.zeros((len(w2), model.ndof))
+    shapes[:, free] = vec.T
+    return ModalResult(np.sqrt(np.maximum(w2, 0.0)) / (2 * np.pi), shapes, rigid)
+
+
+def mode_kind(model: ShellModel, shape: NDArray) -> str:
+    """ "bending" (out-of-plane, symmetric across y), "torsion" (out-of-plane, antisymmetric)
+    or "in-plane", from the mode's nodal translations."""
+    u = shape.reshape(-1, NDOF)[:, :3]
+    w, uv = np.abs(u[:, 2]).max(), np.abs(u[:, :2]).max()
+    if uv > w:
+        return "in-plane"
+    mirror = np.array([model.mesh.nearest_node(x, -y) for x, y in model.mesh.nodes])
+    sym = np.linalg.norm(u[:, 2] + u[mirror, 2])
+    anti = np.linalg.norm(u[:, 2] - u[mirror, 2])
+    return "bending" if sym >= anti else "torsion"

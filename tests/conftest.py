@@ -1,0 +1,34 @@
+"""Shared helpers: build cases from dicts without files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from fsi_orchestrator.case.loader import case_from_dict
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def make_case(tmp_path):
+    def make(**sections):
+        return case_from_dict(sections, tmp_path)
+
+    return make
+
+
+def rectangle(length=10.0, width=1.0, thickness=0.1, E=1.2e6, nu=0.0, rho=1.0, **extra):
+    sections = {
+        "geometry": {
+            "kind": "rectangle",
+            "length_m": length,
+            "width_m": width,
+            "thickness_m": thickness,
+        },
+        "material": {"youngs_modulus_pa": E, "poisson_ratio": nu, "density_kg_m3": rho},
+    }
+    for key, value in extra.items():
+        sections.setdefault(key, {}).update(value)
+    return sections

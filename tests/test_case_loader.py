@@ -1,0 +1,149 @@
+"""Strict case validation: one error line naming the key, exit code 2, no traceback."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fsi_orchestrator.case import CaseError, load_case, parse_override
+from fsi_orchestrator.case.schema import AnalysisKind, Waveform
+from fsi_orchestrator.cli import modal as modal_cli
+from fsi_orchestrator.cli import run as run_cli
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def write_case(tmp_path: Path, text: str) -> Path:
+    (tmp_path / "case.toml").write_text(text)
+    return tmp_path
+
+
+def error_of(tmp_path, text, overrides=()):
+    with pytest.raises(CaseError) as err:
+        load_case(write_case(tmp_path, text), overrides)
+    return str(err.value)
+
+
+def test_negative_frequency_names_the_key(tmp_path):
+    msg = error_of(tmp_path, "[actuation]\nfrequency_hz = -3\n")
+    assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
+
+
+def test_override_is_validated_like_the_file(tmp_path):
+    msg = error_of(tmp_path, "", ["actuation.frequency_hz=-3"])
+    assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("[actuation]\nfrequency = 3\n", "actuation.frequency is not a known key"),
+        ("[actuator]\nfrequency_hz = 3\n", "[actuator] is not a known section"),
+        (
+            '[actuation]\nwaveform = "triangle"\n',
+            'actuation.waveform must be one of "sine" | "square", got \'triangle\'',
+        ),
+        ("[time]\nsteps_per_period = 2.5\n", "time.steps_per_period must be an integer, got 2.5"),
+        ("[actuation]\nleft_volts = [-600, 1500]\n", "actuation.left_volts must lie within"),
+        ("[actuation]\nleft_volts = [1500, -500]\n", "actuation.left_volts must be [min, max]"),
+        (
+            '[geometry]\nkind = "rectangle"\nlength_m = 1\nwidth_m = 0.1\n',
+            "geometry.thickness_m is required",
+        ),
+        (
+            '[geometry]\nkind = "rectangle"\nlength_m = 1\nwidth_m = 0.1\nthickness_m = 0.01\n'
+            "peduncle_height_m = 0.003\n",
+            "geometry.peduncle_height_m does not apply",
+        ),
+        ("[coupling]\nrelaxation = 1.7\n", "coupling.relaxation must be <= 1, got 1.7"),
+        ('[fluid]\nmodel = "lbm"\n', "fluid.model must be one of"),
+        ("[analysis\nkind = 1\n", "not valid TOML"),
+    ],
+)
+def test_bad_input_gives_one_line_naming_the_key(tmp_path, text, expected):
+    msg = error_of(tmp_path, text)
+    assert expected in msg and msg.startswith("case.toml: ") and "\n" not in msg
+
+
+def test_missing_case_file(tmp_path):
+    with pytest.raises(CaseError, match="no case.toml found"):
+        load_case(tmp_path / "nowhere")
+
+
+def test_geometry_that_does_not_fit_names_the_key(tmp_path):
+    case = load_case(write_case(tmp_path, "[geometry]\nactuator_width_m = 0.06\n"))
+    from solid_adapter.geometry import build_layout
+
+    with pytest.raises(CaseError, match="geometry.actuator_width_m .* does not fit"):
+        build_layout(case)
+
+
+def test_parse_override_types():
+    assert parse_override("actuation.frequency_hz=5") == ("actuation", "frequency_hz", 5)
+    assert parse_override("fluid.model=potential") == ("fluid", "model", "potential")
+    assert parse_override("actuation.left_volts=[-500, 500]") == (
+        "actuation",
+        "left_volts",
+        [-500, 500],
+    )
+    with pytest.raises(CaseError):
+        parse_override("frequency_hz=5")
+
+
+def test_defaults_and_enums(tmp_path):
+    case = load_case(write_case(tmp_path, ""))
+    assert case.analysis.kind is AnalysisKind.DYNAMIC
+    assert case.actuation.waveform is Waveform.SINE
+    assert case.actuation.left_volts == (-500.0, 1500.0)
+    with pytest.raises(AttributeError):
+        case.actuation.frequency_hz = 5  # frozen
+
+
+def test_cli_bad_input_exits_2_with_one_line(tmp_path, capsys):
+    write_case(tmp_path, "[actuation]\nfrequency_hz = -3\n")
+    assert run_cli.main([str(tmp_path), "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: case.toml: actuation.frequency_hz must be > 0, got -3"
+
+
+def test_console_script_prints_no_traceback(tmp_path):
+    write_case(tmp_path, "[time]\nperiods = 0\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == "error: case.toml: time.periods must be > 0, got 0"
+    assert "Traceback" not in proc.stderr
+
+
+def test_fsi_run_static_json_contract(capsys):
+    assert run_cli.main([str(ROOT / "cases/rectangle_tip_force"), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert len(summary["tip_displacement_m"]) == 3
+    assert summary["tip_displacement_m"][2] == pytest.approx(6.70, rel=1e-2)  # w/L = 0.670
+
+
+def test_fsi_modal_json_contract(capsys):
+    assert (
+        modal_cli.main(
+            [str(ROOT / "cases/fish_modal_free"), "--json", "--set", "analysis.num_modes=3"]
+        )
+        == 0
+    )
+    summary = json.loads(capsys.readouterr().out)
+    assert len(summary["dry_hz"]) == 3 and summary["dry_hz"] == sorted(summary["dry_hz"])
+
+
+def test_case_format_doc_is_generated_from_the_schema():
+    from fsi_orchestrator.case.docgen import render
+
+    assert (ROOT / "docs/case_format.md").read_text() == render(), (
+        "run: python -m fsi_orchestrator.case.docgen"
+    )
