@@ -74,6 +74,27 @@ class FluidModel(StrEnum):
     OPENFOAM = "openfoam"
 
 
+class FluidDomain(StrEnum):
+    SPHERE = "sphere"  # Sec. 3.4.2.1: sphere around the robot, p = 0 on its surface
+    TANK = "tank"  # Sec. 3.5.2.2: 590 x 133 x 440 mm tank, walls, open top (p = 0)
+
+
+class Turbulence(StrEnum):
+    K_OMEGA_SST = "kOmegaSST"
+    SMAGORINSKY = "Smagorinsky"
+    LAMINAR = "laminar"
+
+
+class TimeScheme(StrEnum):
+    EULER = "Euler"
+    BACKWARD = "backward"
+
+
+class FluidDriver(StrEnum):
+    PERSISTENT = "persistent"  # one pimpleFoam process, one solve per window
+    RELAUNCH = "relaunch"  # each solve restarts from the last converged time folder
+
+
 class CouplingScheme(StrEnum):
     EXPLICIT = "explicit"
     CONSTANT = "constant"
@@ -338,6 +359,42 @@ class Fluid:
     density_kg_m3: float = param(1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", gt=0)
     kinematic_viscosity_m2_s: float = param(0.75e-6, "FC-3283 (Table 3.6).", unit="m^2/s", gt=0)
     mesh_level: MeshLevel = param(MeshLevel.DEFAULT, "Fluid mesh level.")
+    domain: FluidDomain = param(
+        FluidDomain.SPHERE,
+        "potential: fluid domain (the seed's modal sphere or the experiment's tank).",
+    )
+    domain_diameter_m: float = param(
+        0.2, "potential, sphere: diameter (Sec. 3.4.2.1: 0.2).", unit="m", gt=0
+    )
+    tank_length_m: float = param(
+        0.59, "Tank size along the body axis x (Sec. 3.5.2.2).", unit="m", gt=0
+    )
+    tank_depth_m: float = param(
+        0.44, "Tank size along y (vertical; open top at +y).", unit="m", gt=0
+    )
+    tank_width_m: float = param(0.133, "Tank size along z (the swing direction).", unit="m", gt=0)
+    tank_nose_x_m: float | None = param(
+        None,
+        "x of the fish's nose from the tank's front wall (default: fish centred in the tank).",
+        unit="m",
+        gt=0,
+    )
+    damping_ratio: float = param(
+        0.0,
+        "potential, transient: modal damping ratio at the first "
+        "wet mode (the inviscid model has none).",
+        ge=0,
+        lt=1,
+    )
+    added_mass_coefficient: float = param(
+        1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0
+    )
+    turbulence: Turbulence = param(Turbulence.K_OMEGA_SST, "openfoam: turbulence model.")
+    time_scheme: TimeScheme = param(TimeScheme.BACKWARD, "openfoam: ddt scheme.")
+    driver: FluidDriver = param(FluidDriver.RELAUNCH, "openfoam: how solves are driven.")
+    processes: int = param(
+        1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
