@@ -1,0 +1,171 @@
+"""Convergence measures (preCICE semantics, strict ``<``), iteration bounds, divergence
+reporting, and predictors; every number is worked out by hand in the comments."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fsi_orchestrator.acceleration import make_acceleration
+from fsi_orchestrator.convergence import (
+    AbsoluteMeasure,
+    ConvergenceCriteria,
+    ConvergenceSettingsError,
+    CouplingDivergenceError,
+    RelativeMeasure,
+    ResidualRelativeMeasure,
+    WindowStatus,
+)
+from fsi_orchestrator.predictors import Predictor, lagrange_weights
+
+OLD, NEW = np.zeros(2), np.array([3.0, 4.0])  # ||NEW - OLD|| = 5
+
+
+def test_absolute_measure():
+    assert not AbsoluteMeasure(tolerance=5.0).measure(OLD, NEW)  # 5 < 5 is false
+    m = AbsoluteMeasure(tolerance=5.1)
+    assert m.measure(OLD, NEW) and m.norm_diff == 5.0
+
+
+def test_relative_measure():
+    old = np.array([3.0, 3.9])  # ||NEW - old|| = 0.1, ||NEW|| = 5: converged iff tol > 0.02
+    assert RelativeMeasure(tolerance=0.03).measure(old, NEW)
+    m = RelativeMeasure(tolerance=0.01)
+    assert not m.measure(old, NEW)
+    assert m.value == pytest.approx(0.02)
+    assert not RelativeMeasure(tolerance=1.0).measure(OLD, OLD)  # 0 < 1 * 0 is false
+
+
+def test_residual_relative_measure_uses_the_first_residual_of_the_window():
+    m = ResidualRelativeMeasure(tolerance=0.01)
+    assert not m.measure(OLD, NEW)  # first residual 5 is its own reference: never converged
+    assert m.measure(OLD, np.array([0.0, 0.04]))  # 0.04 < 0.01 * 5
+    assert not m.measure(OLD, np.array([0.0, 0.06]))  # 0.06 > 0.05
+    m.reset_window()
+    assert not m.measure(OLD, np.array([0.0, 0.04]))  # new window: 0.04 is the reference now
+
+
+def test_log_lines_state_the_numbers():
+    m = RelativeMeasure(tolerance=0.01)
+    m.measure(np.array([3.0, 3.9]), NEW)
+    line = m.log_line()
+    assert line.startswith("relative:") and "1.000e-01" in line and "2.000e-02" in line
+    assert line.endswith("converged no")
+    criteria = ConvergenceCriteria({"force": [m]})
+    criteria.new_window(4)
+    criteria.check({"force": np.array([3.0, 3.9])}, {"force": NEW})
+    assert criteria.log_lines()[0].startswith("window 4 iteration 1 force: relative:")
+
+
+def test_tolerances_are_validated():
+    with pytest.raises(ConvergenceSettingsError, match=r"relative tolerance must be in \(0, 1\]"):
+        RelativeMeasure(tolerance=1.5)
+    with pytest.raises(ConvergenceSettingsError, match="absolute tolerance must be in"):
+        AbsoluteMeasure(tolerance=0.0)
+    with pytest.raises(ConvergenceSettingsError, match="max_iterations .* must be >= min"):
+        ConvergenceCriteria({}, min_iterations=3, max_iterations=2)
+
+
+def test_min_and_max_iterations():
+    converged_at_once = ConvergenceCriteria(
+        {"f": [AbsoluteMeasure(tolerance=10.0)]}, min_iterations=2, max_iterations=5
+    )
+    assert converged_at_once.check({"f": OLD}, {"f": NEW}) is WindowStatus.ITERATE
+    assert converged_at_once.check({"f": OLD}, {"f": NEW}) is WindowStatus.CONVERGED
+    never = ConvergenceCriteria({"f": [AbsoluteMeasure(tolerance=1.0)]}, max_iterations=3)
+    statuses = [never.check({"f": OLD}, {"f": NEW}) for _ in range(3)]
+    assert statuses == ["iterate", "iterate", "max-iterations"] and statuses[-1].done
+
+
+def test_all_measures_of_all_fields_must_hold():
+    criteria = ConvergenceCriteria(
+        {"force": [AbsoluteMeasure(tolerance=10.0)], "displacement": [AbsoluteMeasure(tolerance=1)]}
+    )
+    fields = {"force": OLD, "displacement": OLD}
+    assert criteria.check(fields, {"force": NEW, "displacement": OLD}) is WindowStatus.CONVERGED
+    assert criteria.check(fields, {"force": NEW, "displacement": NEW}) is WindowStatus.ITERATE
+    with pytest.raises(KeyError, match="displacement"):
+        criteria.check({"force": OLD}, {"force": NEW})
+
+
+def test_a_sufficing_measure_is_enough_on_its_own():
+    # a zero field never meets the relative test (0 < tol * 0 is false); an absolute one helps
+    zero = {"force": np.zeros(2)}
+    strict = ConvergenceCriteria({"force": [RelativeMeasure(tolerance=1e-4)]}, max_iterations=5)
+    assert strict.check(zero, zero) is WindowStatus.ITERATE
+    either = ConvergenceCriteria(
+        {"force": [RelativeMeasure(tolerance=1e-4), AbsoluteMeasure(tolerance=1e-9, suffices=True)]}
+    )
+    assert either.check(zero, zero) is WindowStatus.CONVERGED
+    assert either.check({"force": OLD}, {"force": NEW}) is WindowStatus.ITERATE
+
+
+def test_divergence_of_explicit_iteration_is_reported():
+    # H(x) = diag(-3, 1/2) x + (1, 1), x^0 = 0, plain iteration x^{k+1} = x~^k (omega = 1):
+    # r^k = H(x^k) - x^k = A^k r^0 has components (-3)^k and (1/2)^k; iteration i sees r^(i-1).
+    # ||r^0|| = sqrt(2) is the reference; ||r^k|| first exceeds 1e6 sqrt(2) = 1.41e6 at
+    # k = 13 (3^13 = 1.59e6, 3^12 = 5.3e5): iteration 14.
+    a, b = np.diag([-3.0, 0.5]), np.ones(2)
+    explicit = make_acceleration("constant", relaxation=1.0)
+    explicit.initialize({"force": np.zeros(2)})
+    criteria = ConvergenceCriteria({"force": [RelativeMeasure(tolerance=1e-6)]}, max_iterations=50)
+    criteria.new_window(7)
+    x = {"force": np.zeros(2)}
+    with pytest.raises(CouplingDivergenceError) as caught:
+        while True:
+            xt = {"force": a @ x["force"] + b}
+            assert not criteria.check(x, xt).done
+            x = explicit.perform(x, xt)
+    error = caught.value
+    assert (error.field, error.window, error.iteration) == ("force", 7, 14)
+    assert "field 'force', window 7, iteration 14" in str(error) and "grew beyond" in str(error)
+
+
+def test_non_finite_data_are_reported_even_without_measures():
+    explicit = ConvergenceCriteria({}, max_iterations=1)  # explicit coupling: one solve
+    assert explicit.check({"force": OLD}, {"force": NEW}) is WindowStatus.CONVERGED
+    explicit.new_window(3)
+    with pytest.raises(CouplingDivergenceError, match=r"'force', window 3, iteration 1: non-fin"):
+        explicit.check({"force": OLD}, {"force": np.array([1.0, np.nan])})
+    with pytest.raises(CouplingDivergenceError, match="inf"):
+        explicit.check({"force": np.array([np.inf, 0.0])}, {"force": NEW})
+
+
+# Predictors: values 1 + t + t^2 at window ends t = 0, 1, 2 are 1, 3, 7; at t = 3 the exact
+# value is 13. Lagrange extrapolation: constant 7; linear 2*7 - 3 = 11; quadratic
+# 3*7 - 3*3 + 1 = 13.
+@pytest.mark.parametrize(
+    ("order", "expected"), [("constant", 7), ("linear", 11), ("quadratic", 13)]
+)
+def test_predictors_on_a_quadratic_history(order, expected):
+    p = Predictor(order)
+    for t in (0.0, 1.0, 2.0):
+        p.record(t, {"force": np.full((2, 3), 1 + t + t * t)})
+    predicted = p.predict(3.0)["force"]
+    assert predicted.shape == (2, 3)
+    np.testing.assert_allclose(predicted, expected, rtol=1e-14)
+
+
+def test_predictors_fall_back_with_a_short_history_and_handle_uneven_windows():
+    p = Predictor("quadratic")
+    p.record(0.0, {"f": np.array([1.0])})
+    assert p.predict(1.0)["f"] == pytest.approx([1.0])  # one value: constant
+    p.record(0.5, {"f": np.array([1.75])})  # 1 + t + t^2 at t = 0.5
+    assert p.predict(1.0)["f"] == pytest.approx([2.5])  # two values: line through them
+    p.record(2.0, {"f": np.array([7.0])})
+    assert p.predict(3.0)["f"] == pytest.approx([13.0], rel=1e-14)  # exact for a quadratic
+    np.testing.assert_allclose(lagrange_weights([0, 1, 2], 3), [1, -3, 3])
+
+
+def test_predictor_state_round_trip_and_checks():
+    p = Predictor("linear")
+    p.record(0.0, {"f": np.array([1.0, 2.0])})
+    p.record(0.1, {"f": np.array([2.0, 2.0])})
+    q = Predictor("linear")
+    q.load_state(p.save_state())
+    np.testing.assert_array_equal(q.predict(0.2)["f"], p.predict(0.2)["f"])
+    np.testing.assert_allclose(q.predict(0.2)["f"], [3.0, 2.0])
+    with pytest.raises(ValueError, match="must increase"):
+        p.record(0.1, {"f": np.zeros(2)})
+    with pytest.raises(ValueError, match="extrapolation must be one of"):
+        Predictor("cubic")
