@@ -9,9 +9,10 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import GeometryKind
+from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
 from .geometry import build_layout
+from .harmonic import mean_volts, periodic_response
 from .mesh import build_mesh
 from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
@@ -22,6 +23,7 @@ from .solvers import (
     TimeIntegrator,
     make_integrator,
     modal_analysis,
+    mode_kind,
     solve_static,
 )
 
@@ -45,12 +47,36 @@ def static_loads(case: Case, model: ShellModel) -> StaticLoads:
     return StaticLoads(edge=edge, pressure_pa=case.loads.pressure_pa)
 
 
-def rayleigh_damping(case: Case, model: ShellModel) -> sp.spmatrix | None:
+def rayleigh_coefficients(case: Case, model: ShellModel) -> tuple[float, float]:
+    """(alpha, beta) of C = alpha M + beta K0: analysis.rayleigh_*, plus, with
+    fluid.damping_ratio > 0, the pair giving that ratio at the first two bending modes of the
+    (wet) model."""
     a, b = case.analysis.rayleigh_alpha_per_s, case.analysis.rayleigh_beta_s
+    zeta = case.fluid.damping_ratio
+    if zeta > 0:
+        w1, w2 = 2 * np.pi * bending_frequencies(model, 2)
+        a += 2 * zeta * w1 * w2 / (w1 + w2)
+        b += 2 * zeta / (w1 + w2)
+    return a, b
+
+
+def rayleigh_damping(case: Case, model: ShellModel) -> sp.spmatrix | None:
+    a, b = rayleigh_coefficients(case, model)
     if a == 0 and b == 0:
         return None
     K0 = model.internal(model.zero_state(), np.zeros(2))[1]
-    return a * model.mass + b * K0
+    return a * model.inertia + b * K0
+
+
+def bending_frequencies(model: ShellModel, count: int) -> NDArray:
+    """The lowest ``count`` bending-mode frequencies (Hz) of the model with its inertia."""
+    result = modal_analysis(model, 3 * count + 3)
+    found = [
+        f
+        for f, s in zip(result.frequencies_hz, result.shapes, strict=True)
+        if mode_kind(model, s) == "bending"
+    ]
+    return np.array(found[:count])
 
 
 def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
@@ -66,14 +92,35 @@ def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
 
 def build_shell_participant(case: Case, model: ShellModel | None = None) -> ShellParticipant:
     model = model or build_shell_model(case)
-    if has_actuators(case):
-        volts = DriveSignal.from_case(case).volts
-    else:
+    loads = static_loads(case, model)
+    integrator = build_integrator(case, model)
+    if not has_actuators(case):
+        return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
+    drive = DriveSignal.from_case(case)
+    x0 = v0 = None
+    if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
+        x0, v0 = periodic_start(case, model, drive, loads, integrator)
+    return ShellParticipant(model, integrator, drive.volts, loads, x0=x0, v0=v0)
 
-        def volts(t: float) -> NDArray:
-            return np.zeros(2)
 
-    return ShellParticipant(model, build_integrator(case, model), volts, static_loads(case, model))
+def periodic_start(
+    case: Case,
+    model: ShellModel,
+    drive: DriveSignal,
+    loads: StaticLoads,
+    integrator: TimeIntegrator,
+) -> tuple[NDArray, NDArray]:
+    """State at t = 0 of the linear periodic response about the mean-voltage equilibrium."""
+    mean = mean_volts(drive)
+    x_static = solve_static(
+        model,
+        lambda lam, x, tangent: (lam * loads.edge, None),
+        lambda lam: lam * mean,
+        4,
+        newton_settings(case),
+    )
+    response = periodic_response(model, drive, x_static, integrator.C)
+    return response.at(0.0)
 
 
 @dataclass(frozen=True)

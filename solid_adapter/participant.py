@@ -45,6 +45,8 @@ class ShellParticipant:
         volts,
         loads: StaticLoads,
         t0: float = 0.0,
+        x0: NDArray | None = None,
+        v0: NDArray | None = None,
     ) -> None:
         self.model = model
         self.volts = volts
@@ -53,7 +55,9 @@ class ShellParticipant:
         self._force = np.zeros((model.n_nodes, 3))
         self._pressure = np.zeros(model.n_nodes)
         self.tip_node = model.mesh.nearest_node(*model.layout.tip_point)
-        self.state = self.integrator.initial_state(t0, self.external_load, volts)
+        on_axis = np.flatnonzero(np.abs(model.mesh.nodes[:, 1]) < 1e-12 * model.layout.length_m)
+        self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
+        self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0)
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
 
     # --------------------------------------------------------------- loads
@@ -98,11 +102,18 @@ class ShellParticipant:
         }
 
     def monitor(self) -> dict[str, NDArray | float]:
-        """Quantities recorded every window: tail-tip (free-edge mid-point) displacement."""
+        """Quantities recorded every window: tail-tip (free-edge mid-point) displacement, the
+        midline's z displacement (nodes at y = 0, nose to tail) and the Newton count."""
+        X = self.state.x.reshape(-1, NDOF)
         return {
-            "tip_displacement_m": self.state.x.reshape(-1, NDOF)[self.tip_node, :3].copy(),
+            "tip_displacement_m": X[self.tip_node, :3].copy(),
+            "midline_z_m": X[self.midline_nodes, 2].copy(),
             "newton_iterations": float(self.integrator.newton_iterations),
         }
+
+    @property
+    def midline_x_m(self) -> NDArray:
+        return self.model.mesh.nodes[self.midline_nodes, 0].copy()
 
     def store_checkpoint(self) -> None:
         self._checkpoint = (self.state.copy(), self._force.copy(), self._pressure.copy())

@@ -130,6 +130,21 @@ class ShellModel:
         self.reference_points = np.column_stack([mesh.nodes, np.zeros(self.n_nodes)])
         self.area_matrix = self._scalar_mass(np.ones_like(mesh.full.weights))
         self.mass = self._mass_matrix()
+        self.added_mass: sp.csr_matrix | None = None
+        self.inertia = self.mass  # structural mass plus any fluid added mass
+
+    def set_added_mass(self, matrix_z: NDArray | None) -> None:
+        """Add a fluid added-mass operator acting on the nodal normal (z) accelerations
+        (n_nodes x n_nodes, dense) to the inertia; None removes it."""
+        if matrix_z is None:
+            self.added_mass, self.inertia = None, self.mass
+            return
+        rows = np.arange(self.n_nodes) * NDOF + 2
+        coo = sp.coo_matrix(matrix_z)
+        self.added_mass = sp.csr_matrix(
+            (coo.data, (rows[coo.row], rows[coo.col])), shape=(self.ndof, self.ndof)
+        )
+        self.inertia = sp.csr_matrix(self.mass + self.added_mass)
 
     # ------------------------------------------------------------------ state helpers
     def zero_state(self) -> NDArray:

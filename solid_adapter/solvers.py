@@ -253,7 +253,7 @@ class TimeIntegrator:
         rhs = f_ext - f_int - (self.C @ v if self.C is not None else 0.0)
         a = np.zeros(m.ndof)
         free = m.free_dofs
-        a[free] = spla.spsolve(sp.csc_matrix(m.mass[free][:, free]), rhs[free])
+        a[free] = spla.spsolve(sp.csc_matrix(m.inertia[free][:, free]), rhs[free])
         return DynamicState(t0, x, v, a, f_int, f_ext)
 
     max_halvings = 4  # a window whose Newton fails is retried as 2, 4, ... 16 sub-steps
@@ -274,7 +274,7 @@ class TimeIntegrator:
         raise NotImplementedError
 
     def kinetic_energy(self, s: DynamicState) -> float:
-        return 0.5 * float(s.v @ (self.model.mass @ s.v))
+        return 0.5 * float(s.v @ (self.model.inertia @ s.v))
 
 
 class GeneralizedAlphaIntegrator(TimeIntegrator):
@@ -305,13 +305,13 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             v1, a1 = kinematics(x1)
             f_int, K = internal(x1, V1, tangent)
             f_ext, Kf = loads(t1, x1, tangent)
-            r = m.mass @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
+            r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
             if self.C is not None:
                 r += self.C @ ((1 - p.alpha_f) * v1 + p.alpha_f * s.v)
             if not tangent:
                 return r, None
-            T = c_a * m.mass + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
+            T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
             if self.C is not None:
                 T = T + c_v * self.C
             return r, T
@@ -349,7 +349,7 @@ class EnergyConservingIntegrator(TimeIntegrator):
         def residual(x1: NDArray, tangent: bool):
             dx = x1 - s.x
             f_mid, K_mid = internal(s.x + 0.5 * dx, V, tangent)
-            Mdx = m.mass @ dx
+            Mdx = m.inertia @ dx
             denom = float(dx @ Mdx)
             f_alg, c, w = f_mid, 0.0, None
             if denom > 1e-300:
@@ -359,12 +359,12 @@ class EnergyConservingIntegrator(TimeIntegrator):
                 if tangent:  # dc/dx1
                     w = (f1 - f_mid - 0.5 * (K_mid.T @ dx) - 2.0 * c * Mdx) / denom
             f_ext, Kf = loads(t1, x1, tangent)
-            r = (2.0 / dt**2) * (Mdx - dt * (m.mass @ s.v)) + f_alg - 0.5 * (f_ext + s.f_ext)
+            r = (2.0 / dt**2) * (Mdx - dt * (m.inertia @ s.v)) + f_alg - 0.5 * (f_ext + s.f_ext)
             if self.C is not None:
                 r += self.C @ (dx / dt)
             if not tangent:
                 return r, None
-            T = (2.0 / dt**2 + c) * m.mass + 0.5 * K_mid
+            T = (2.0 / dt**2 + c) * m.inertia + 0.5 * K_mid
             if Kf is not None:
                 T = T - 0.5 * Kf
             if self.C is not None:
@@ -397,9 +397,9 @@ def modal_analysis(
 ) -> ModalResult:
     """Lowest elastic modes of K phi = w^2 M phi on the free DOFs (rigid modes dropped when the
     plate is unsupported). ``stiffness``/``mass`` default to the reference tangent and the
-    structural mass (a fluid model may pass M + M_added)."""
+    model's inertia (structural mass plus any fluid added mass)."""
     K = stiffness if stiffness is not None else model.internal(model.zero_state(), np.zeros(2))[1]
-    M = mass if mass is not None else model.mass
+    M = mass if mass is not None else model.inertia
     free = model.free_dofs
     rigid = 6 if model.layout.clamp_x_m is None else 0
     Kff, Mff = sp.csc_matrix(K[free][:, free]), sp.csc_matrix(M[free][:, free])

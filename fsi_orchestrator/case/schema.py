@@ -61,6 +61,11 @@ class Waveform(StrEnum):
     SQUARE = "square"
 
 
+class StartMode(StrEnum):
+    PERIODIC = "periodic"  # on the linear periodic orbit: the first periods are steady state
+    REST = "rest"  # at rest in static equilibrium under the voltages of t = 0 (the seed)
+
+
 class MeshLevel(StrEnum):
     COARSE = "coarse"
     DEFAULT = "default"
@@ -344,6 +349,11 @@ class Time:
     end_time_s: float | None = param(
         None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0
     )
+    start: StartMode = param(
+        StartMode.PERIODIC,
+        "dynamic with actuation: start on the linear periodic response (no start-up "
+        "transient to wait for) or at rest like the seed.",
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -394,6 +404,12 @@ class Fluid:
     driver: FluidDriver = param(FluidDriver.RELAUNCH, "openfoam: how solves are driven.")
     processes: int = param(
         1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1
+    )
+    max_courant: float = param(
+        2.0,
+        "openfoam: largest Courant number of a fluid time step; each coupling window is split "
+        "into as many fluid steps as this needs (the interface moves linearly within a window).",
+        gt=0,
     )
 
 

@@ -1,19 +1,38 @@
-"""``fsi-modal CASE``: mode frequencies in vacuum (dry) and, with a fluid model, in the liquid."""
+"""``fsi-modal CASE``: mode frequencies in vacuum (dry) and, with a fluid model, in the liquid
+(potential flow; an OpenFOAM case is analysed with the potential model in its tank)."""
 
 from __future__ import annotations
 
 import argparse
+import time
 from collections.abc import Sequence
 
 from .common import EXIT_OK, base_parser, emit, load, run_main
+from .compose import modal_fluid_case, shell_with_fast_fluid
 
 
 def modal_summary(case) -> dict:
-    from solid_adapter.build import build_shell_model, run_dry_modal
+    from solid_adapter.solvers import modal_analysis, mode_kind
 
-    model = build_shell_model(case)
-    dry = run_dry_modal(case, model)
-    return {"dry_hz": sorted(dry.frequencies_hz.tolist())}
+    start = time.perf_counter()
+    case = modal_fluid_case(case)
+    model, added = shell_with_fast_fluid(case)
+    n = case.analysis.num_modes
+
+    def modes(result) -> tuple[list[float], list[str]]:
+        return (result.frequencies_hz.tolist(), [mode_kind(model, s) for s in result.shapes])
+
+    wet = modal_analysis(model, n) if added is not None else None
+    model.set_added_mass(None)
+    summary: dict = {}
+    summary["dry_hz"], summary["dry_kinds"] = modes(modal_analysis(model, n))
+    if wet is not None:
+        summary["wet_hz"], summary["wet_kinds"] = modes(wet)
+        summary["added_mass_kg"] = added.total()
+        summary["plate_mass_kg"] = model.total_mass_kg()
+        summary["fluid_nodes"] = added.n_fluid_nodes
+    summary["wall_s"] = time.perf_counter() - start
+    return summary
 
 
 def _body(args: argparse.Namespace) -> int:

@@ -16,6 +16,7 @@ from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..loop import OutputSettings, Schedule, WindowLoop
 from .common import EXIT_OK, base_parser, emit, load, run_main
+from .compose import shell_with_fast_fluid
 from .modal import modal_summary
 
 
@@ -75,9 +76,13 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
 def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
     from solid_adapter.build import build_shell_participant
 
-    if case.fluid.model is not FluidModel.NONE:
-        raise NotImplementedError_(case)
-    solid = build_shell_participant(case)
+    if case.fluid.model is FluidModel.OPENFOAM:
+        raise RuntimeError(
+            'fluid.model = "openfoam" is not available in this version; use "potential" '
+            '(fast potential flow) or "none"'
+        )
+    model, added = shell_with_fast_fluid(case)
+    solid = build_shell_participant(case, model)
     schedule = schedule_of(case)
     settings = OutputSettings(
         directory=output,
@@ -90,14 +95,33 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
     with progress_bar(schedule.n_windows, show_progress) as progress:
         path = WindowLoop(solid, schedule, settings, progress).run(resume=resume)
     summary = dynamic_summary(case, path)
+    if added is not None:
+        summary["added_mass_kg"] = added.total()
+        summary.update(thrust_estimate(case, solid, path))
     summary["wall_s"] = time.perf_counter() - start
     return summary
 
 
-def NotImplementedError_(case: Case) -> RuntimeError:
-    return RuntimeError(
-        f'fluid.model = "{case.fluid.model}" is not available in this version; use "none"'
+def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
+    """Slender-body (Lighthill, eq. 5-12, fixed head) mean thrust over the last period."""
+    from fluid_adapter.slender_body import mean_thrust_from_shell
+
+    if case.time.step_s is not None or case.time.periods < 1:
+        return {}
+    with h5py.File(results_path, "r") as h5:
+        t = h5["time_s"][:, 0]
+        midline = h5["shell/midline_z_m"][:]
+    xs = solid.midline_x_m
+    thrust = mean_thrust_from_shell(
+        xs,
+        solid.model.layout.height(xs) / 2,
+        t,
+        midline,
+        density_kg_m3=case.fluid.density_kg_m3,
+        period_s=1.0 / case.actuation.frequency_hz,
+        added_mass_coefficient=case.fluid.added_mass_coefficient,
     )
+    return {"slender_body_mean_thrust_n": thrust}
 
 
 def static_summary(case: Case) -> dict:

@@ -1,0 +1,181 @@
+"""``fsi-sweep CASE``: tail amplitude and slender-body thrust over driving frequencies.
+
+``--method linear`` (default, seconds): the wet shell's linear periodic response per frequency
+and harmonic (the added mass is computed once), thrust by Lighthill's theory on that motion.
+``--method transient``: the nonlinear time-domain run per frequency (as ``fsi-run``).
+Writes ``sweep.csv`` and ``sweep.json`` to the output folder and prints a table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..case import Case, CaseError
+from ..case.schema import Waveform
+from .common import EXIT_OK, base_parser, emit, load, run_main, to_jsonable
+from .compose import shell_with_fast_fluid
+
+SAMPLES_PER_PERIOD = 64
+MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
+
+
+def parse_frequencies(text: str) -> list[float]:
+    """ "1:25:2" -> 1, 3, ..., 25; "3,5,10" -> those."""
+    try:
+        if ":" in text:
+            start, stop, step = (float(v) for v in text.split(":"))
+            return list(np.arange(start, stop + 0.5 * step, step))
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise CaseError(f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz)") from None
+
+
+def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
+    actuation = dataclasses.replace(case.actuation, frequency_hz=frequency_hz, waveform=waveform)
+    return dataclasses.replace(case, actuation=actuation)
+
+
+def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]) -> list[dict]:
+    from fluid_adapter.slender_body import mean_thrust_from_shell
+    from solid_adapter.build import newton_settings, rayleigh_coefficients, static_loads
+    from solid_adapter.harmonic import ModalSweep, harmonic_load, mean_volts, sweep_response
+    from solid_adapter.piezo import DriveSignal
+    from solid_adapter.solvers import solve_static
+
+    model, _ = shell_with_fast_fluid(case)
+    drive0 = DriveSignal.from_case(case)
+    loads, mean = static_loads(case, model), mean_volts(drive0)
+    x_static = solve_static(
+        model,
+        lambda lam, x, t: (lam * loads.edge, None),
+        lambda lam: lam * mean,
+        4,
+        newton_settings(case),
+    )
+    sweep = ModalSweep.build(
+        model, harmonic_load(model, drive0), MODES, rayleigh_coefficients(case, model)
+    )
+    midline = _midline(model)
+    xs = model.mesh.nodes[midline, 0]
+    half_height = model.layout.height(xs) / 2
+    tip = model.mesh.nearest_node(*model.layout.tip_point)
+    rows = []
+    for waveform in waveforms:
+        for f in frequencies:
+            drive = DriveSignal.from_case(with_drive(case, f, waveform))
+            response = sweep_response(sweep, drive, x_static)
+            times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
+            h = response.dof_history(midline * 5 + 2, times)
+            tip_z = response.dof_history(np.array([tip * 5 + 2]), times)[:, 0]
+            thrust = mean_thrust_from_shell(
+                xs,
+                half_height,
+                times,
+                h,
+                density_kg_m3=case.fluid.density_kg_m3,
+                period_s=1.0 / f,
+                added_mass_coefficient=case.fluid.added_mass_coefficient,
+            )
+            rows.append(
+                {
+                    "waveform": waveform.value,
+                    "frequency_hz": float(f),
+                    "tip_amplitude_m": float(np.ptp(tip_z) / 2),
+                    "slender_body_mean_thrust_n": float(thrust),
+                }
+            )
+    return rows
+
+
+def transient_sweep(
+    case: Case, frequencies: list[float], waveforms: list[Waveform], output: Path
+) -> list[dict]:
+    from .run import run_dynamic
+
+    rows = []
+    for waveform in waveforms:
+        for f in frequencies:
+            summary = run_dynamic(
+                with_drive(case, f, waveform),
+                output / f"{waveform.value}_{f:g}Hz",
+                resume=False,
+                show_progress=False,
+            )
+            rows.append(
+                {
+                    "waveform": waveform.value,
+                    "frequency_hz": float(f),
+                    "tip_amplitude_m": summary["tip_amplitude_m"],
+                    "slender_body_mean_thrust_n": summary.get(
+                        "slender_body_mean_thrust_n", float("nan")
+                    ),
+                }
+            )
+    return rows
+
+
+def _midline(model) -> np.ndarray:
+    nodes = model.mesh.nodes
+    on_axis = np.flatnonzero(np.abs(nodes[:, 1]) < 1e-12 * model.layout.length_m)
+    return on_axis[np.argsort(nodes[on_axis, 0])]
+
+
+def write_tables(rows: list[dict], output: Path) -> None:
+    output.mkdir(parents=True, exist_ok=True)
+    with open(output / "sweep.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (output / "sweep.json").write_text(json.dumps(to_jsonable(rows), indent=1))
+
+
+def print_table(rows: list[dict]) -> None:
+    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {'thrust [mN]':>12}")
+    for r in rows:
+        print(
+            f"{r['waveform']:>8} {r['frequency_hz']:7.2f} {1e3 * r['tip_amplitude_m']:19.2f} "
+            f"{1e3 * r['slender_body_mean_thrust_n']:12.2f}"
+        )
+
+
+def _body(args: argparse.Namespace) -> int:
+    case = load(args)
+    frequencies = parse_frequencies(args.frequencies)
+    try:
+        waveforms = [Waveform(w.strip()) for w in args.waveforms.split(",")]
+    except ValueError:
+        raise CaseError(f"--waveforms {args.waveforms!r}: use sine, square or both") from None
+    output = Path(args.output) if args.output else case.directory / "output" / "sweep"
+    start = time.perf_counter()
+    if args.method == "linear":
+        rows = linear_sweep(case, frequencies, waveforms)
+    else:
+        rows = transient_sweep(case, frequencies, waveforms, output)
+    write_tables(rows, output)
+    if args.json:
+        emit({"rows": rows, "wall_s": time.perf_counter() - start, "output": str(output)}, True)
+    else:
+        print_table(rows)
+        print(f"wrote {output / 'sweep.csv'} ({time.perf_counter() - start:.1f} s)")
+    return EXIT_OK
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = base_parser("fsi-sweep", "Tail amplitude and thrust versus driving frequency.")
+    parser.add_argument("--frequencies", default="1:25:2", help="start:stop:step or a,b,c Hz")
+    parser.add_argument("--waveforms", default="sine,square", help="sine, square or both")
+    parser.add_argument("--method", choices=("linear", "transient"), default="linear")
+    parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
+    return run_main(_body, parser, argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,165 @@
+"""Linear periodic response of the (wet) shell to the piezo drive, about its static state.
+
+Used twice: as the initial condition of a time-domain run (start on the periodic orbit instead
+of at rest, so the first periods are already the steady state rather than a beating of the
+forced response with an undamped free vibration), and as the fast frequency sweep.
+
+The drive's oscillating part is [amp_L, -amp_R] s(t) with s = sin(w t) or the square wave
+(4/pi) sum_{k odd} sin(k w t)/k. For each harmonic k:
+
+    (K - (k w)^2 M + i k w C) X_k = F_V c_k,        x(t) = x_s + sum_k Im(X_k e^{i k w t}),
+
+with F_V the piezo load per volt on each actuator, K the tangent of the unstressed plate, M the
+inertia (structure plus added mass), C the damping, x_s the static state under the mean
+voltages. K is not taken at x_s: equal mean voltages expand both MFCs in-plane, which
+compresses the thin bare CFRP around them close to its buckling strain, and the prestressed
+tangent can turn indefinite; the bending response does not feel that membrane prestress.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from fsi_orchestrator.case.schema import Waveform
+
+from .piezo import DriveSignal
+from .shell import ShellModel
+
+
+def piezo_load_per_volt(model: ShellModel, x: NDArray | None = None) -> NDArray:
+    """(2, ndof): external-load equivalent of one volt on the left / right actuator at x."""
+    x = model.zero_state() if x is None else x
+    base = model.internal(x, np.zeros(2), tangent=False)[0]
+    loads = []
+    for side in range(2):
+        volts = np.zeros(2)
+        volts[side] = 1.0
+        loads.append(base - model.internal(x, volts, tangent=False)[0])
+    return np.array(loads)
+
+
+def harmonic_amplitudes(drive: DriveSignal, n_harmonics: int) -> list[tuple[int, float]]:
+    """(k, c_k) of the unit waveform s(t) = sum c_k sin(k w t)."""
+    if drive.waveform is Waveform.SINE:
+        return [(1, 1.0)]
+    return [(k, 4 / (np.pi * k)) for k in range(1, 2 * n_harmonics, 2)]
+
+
+@dataclass(frozen=True)
+class PeriodicResponse:
+    omega: float
+    x_static: NDArray
+    harmonics: list[tuple[int, NDArray]]  # (k, complex X_k)
+
+    def at(self, t: float) -> tuple[NDArray, NDArray]:
+        """Displacement and velocity at time t."""
+        x, v = self.x_static.copy(), np.zeros_like(self.x_static)
+        for k, X in self.harmonics:
+            phase = np.exp(1j * k * self.omega * t)
+            x += np.imag(X * phase)
+            v += np.imag(1j * k * self.omega * X * phase)
+        return x, v
+
+    def dof_history(self, dofs: NDArray, times: NDArray) -> NDArray:
+        """(len(times), len(dofs)) displacement history of some DOFs."""
+        out = np.broadcast_to(self.x_static[dofs], (len(times), len(dofs))).copy()
+        for k, X in self.harmonics:
+            out += np.imag(np.exp(1j * k * self.omega * times)[:, None] * X[dofs][None, :])
+        return out
+
+
+def periodic_response(
+    model: ShellModel,
+    drive: DriveSignal,
+    x_static: NDArray,
+    damping: sp.spmatrix | None = None,
+    n_harmonics: int = 15,
+) -> PeriodicResponse:
+    """Linear steady state about ``x_static`` (the equilibrium under the mean voltages)."""
+    omega = 2 * np.pi * drive.frequency_hz
+    K = model.internal(model.zero_state(), np.zeros(2))[1]
+    load = harmonic_load(model, drive)
+    free = model.free_dofs
+    harmonics = []
+    for k, c in harmonic_amplitudes(drive, n_harmonics):
+        w = k * omega
+        A = K - w**2 * model.inertia
+        if damping is not None:
+            A = A + 1j * w * damping
+        X = np.zeros(model.ndof, dtype=complex)
+        X[free] = spla.spsolve(sp.csc_matrix(A[free][:, free]), c * load[free])
+        harmonics.append((k, X))
+    return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
+
+
+def mean_volts(drive: DriveSignal) -> NDArray:
+    (lo_l, hi_l), (lo_r, hi_r) = drive.left_volts, drive.right_volts
+    return np.array([(lo_l + hi_l) / 2, (lo_r + hi_r) / 2])
+
+
+@dataclass(frozen=True)
+class ModalSweep:
+    """Frequency response by modal superposition with a static correction (the "modal
+    acceleration" method): exact for Rayleigh damping, and after one eigen-solve each frequency
+    costs a few vector operations.
+
+        X(w) = sum_j phi_j (phi_j . F) [1/(w_j^2 - w^2 + 2 i zeta_j w_j w) - 1/w_j^2] + K^-1 F
+    """
+
+    omegas: NDArray  # (m,) rad/s
+    shapes: NDArray  # (m, ndof), inertia-normalised
+    zetas: NDArray  # (m,)
+    static: NDArray  # K^-1 F (ndof,)
+    modal_load: NDArray  # phi_j . F
+
+    @classmethod
+    def build(
+        cls,
+        model: ShellModel,
+        load: NDArray,
+        n_modes: int,
+        rayleigh: tuple[float, float] = (0.0, 0.0),
+    ) -> ModalSweep:
+        from .solvers import modal_analysis
+
+        K = model.internal(model.zero_state(), np.zeros(2))[1]
+        result = modal_analysis(model, n_modes, stiffness=K)
+        omegas = 2 * np.pi * result.frequencies_hz
+        alpha, beta = rayleigh
+        free = model.free_dofs
+        static = np.zeros(model.ndof)
+        static[free] = spla.spsolve(sp.csc_matrix(K[free][:, free]), load[free])
+        return cls(
+            omegas=omegas,
+            shapes=result.shapes,
+            zetas=alpha / (2 * omegas) + beta * omegas / 2,
+            static=static,
+            modal_load=result.shapes @ load,
+        )
+
+    def response(self, omega: float) -> NDArray:
+        wj = self.omegas
+        dynamic = 1.0 / (wj**2 - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
+        return self.static + (self.modal_load * dynamic) @ self.shapes
+
+
+def harmonic_load(model: ShellModel, drive: DriveSignal) -> NDArray:
+    """Load vector of a unit oscillation s(t): F_V [amp_L, -amp_R] on the flat plate."""
+    per_volt = piezo_load_per_volt(model)
+    (lo_l, hi_l), (lo_r, hi_r) = drive.left_volts, drive.right_volts
+    return per_volt[0] * (hi_l - lo_l) / 2 - per_volt[1] * (hi_r - lo_r) / 2
+
+
+def sweep_response(
+    sweep: ModalSweep, drive: DriveSignal, x_static: NDArray, n_harmonics: int = 15
+) -> PeriodicResponse:
+    omega = 2 * np.pi * drive.frequency_hz
+    harmonics = [
+        (k, c * sweep.response(k * omega)) for k, c in harmonic_amplitudes(drive, n_harmonics)
+    ]
+    return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
