@@ -6,6 +6,8 @@ outline and returns the added-mass operator on the shell's nodal normal accelera
 
 from __future__ import annotations
 
+import hashlib
+
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import FluidDomain, MeshLevel
 
@@ -56,9 +58,22 @@ def build_fluid(case: Case, shell_model) -> FluidMesh:
     )
 
 
+_CACHE: dict[tuple, AddedMass] = {}
+
+
 def build_added_mass(case: Case, shell_model) -> AddedMass:
-    fluid = build_fluid(case, shell_model)
-    return added_mass(fluid, shell_model.mesh.basis.probes, case.fluid.density_kg_m3)
+    """The added mass of the case's liquid on this shell mesh. Kept for the process: a sweep or
+    a design study over drive parameters or boundary conditions meshes and solves it once."""
+    key = (
+        hashlib.sha1(shell_model.mesh.nodes.tobytes()).hexdigest(),
+        fluid_domain(case, shell_model.layout.length_m),
+        case.fluid.mesh_level,
+        case.fluid.density_kg_m3,
+    )
+    if key not in _CACHE:
+        fluid = build_fluid(case, shell_model)
+        _CACHE[key] = added_mass(fluid, shell_model.mesh.basis.probes, case.fluid.density_kg_m3)
+    return _CACHE[key]
 
 
 __all__ = [
