@@ -117,6 +117,22 @@ class RelativeMeasure(ConvergenceMeasure):
         return float(np.linalg.norm(new))
 
 
+class ScaledRelativeMeasure(RelativeMeasure):
+    """``||x~ - x|| < tol max(||x~||, s)`` with a scale ``s`` the caller sets before each check:
+    when the exchanged variable is a corrected force (added-mass schemes: the fluid force plus
+    the model's added-mass force) it is small next to the fluid force it stands for, and the
+    tolerance refers to that fluid force."""
+
+    kind = "relative-to-scale"
+
+    def __init__(self, *, tolerance: float, suffices: bool = False) -> None:
+        super().__init__(tolerance=tolerance, suffices=suffices)
+        self.scale = 0.0
+
+    def _reference(self, new: NDArray) -> float:
+        return max(float(np.linalg.norm(new)), self.scale)
+
+
 class ResidualRelativeMeasure(ConvergenceMeasure):
     """``||x~ - x|| < tol * ||x~ - x||`` of the window's first iteration."""
 

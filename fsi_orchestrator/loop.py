@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .coupling import Coupling
 from .participant import DISPLACEMENT, Participant
 from .results import (
     CHECKPOINT_FILE,
@@ -48,7 +49,7 @@ ProgressFn = Callable[[int, int], None]
 
 
 class WindowLoop:
-    """Runs ``solid`` (and, from the coupling issue on, a fluid) over the schedule."""
+    """Runs ``solid`` alone, or coupled to a fluid through ``coupling``, over the schedule."""
 
     def __init__(
         self,
@@ -56,14 +57,25 @@ class WindowLoop:
         schedule: Schedule,
         output: OutputSettings,
         progress: ProgressFn | None = None,
+        coupling: Coupling | None = None,
     ) -> None:
         self.solid, self.schedule, self.output = solid, schedule, output
         self.progress = progress or (lambda done, total: None)
+        self.coupling = coupling
         self.window = 0
 
     @property
     def participants(self) -> dict[str, Participant]:
-        return {self.solid.name: self.solid}
+        found = {self.solid.name: self.solid}
+        if self.coupling is not None:
+            found[self.coupling.fluid.name] = self.coupling.fluid
+        return found
+
+    def _solve_window(self) -> dict[str, float]:
+        if self.coupling is None:
+            self.solid.solve(self.schedule.dt)
+            return {}
+        return self.coupling.solve_window(self.solid, self.schedule.dt, self.window)
 
     def run(self, resume: bool = False) -> Path:
         out = self.output.directory
@@ -76,9 +88,9 @@ class WindowLoop:
         try:
             while self.window < self.schedule.n_windows:
                 start = wallclock.perf_counter()
-                self.solid.solve(self.schedule.dt)
+                stats = self._solve_window()
                 self.window += 1
-                self._record(results, vtk, wallclock.perf_counter() - start)
+                self._record(results, vtk, wallclock.perf_counter() - start, stats)
                 if (
                     self.window % self.output.checkpoint_every == 0
                     or self.window == self.schedule.n_windows
@@ -90,8 +102,14 @@ class WindowLoop:
         return out / RESULTS_FILE
 
     # ----------------------------------------------------------------- recording
-    def _record(self, results: ResultsFile, vtk: dict[str, VtkSeries], wall_s: float) -> None:
-        row: dict[str, object] = {"time_s": self.solid.time, "wall_s": wall_s}
+    def _record(
+        self,
+        results: ResultsFile,
+        vtk: dict[str, VtkSeries],
+        wall_s: float,
+        stats: dict[str, float],
+    ) -> None:
+        row: dict[str, object] = {"time_s": self.solid.time, "wall_s": wall_s, **stats}
         for name, p in self.participants.items():
             monitor = getattr(p, "monitor", None)
             if monitor is not None:
@@ -117,18 +135,20 @@ class WindowLoop:
 
     # ----------------------------------------------------------------- checkpoints
     def _checkpoint(self, path: Path) -> None:
-        write_checkpoint(
-            path,
-            {"window": self.window},
-            {name: p.save_state() for name, p in self.participants.items()},
-        )
+        loop_state: dict = {"window": self.window}
+        if self.coupling is not None:
+            loop_state["coupling"] = self.coupling.save_state()
+        write_checkpoint(path, loop_state, {self.solid.name: self.solid.save_state()})
 
     def _resume(self, path: Path) -> None:
         if not path.exists():
             raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
         loop_state, states = read_checkpoint(path)
         self.window = int(loop_state["window"])
-        for name, p in self.participants.items():
-            if name not in states:
-                raise ResumeError(f"{path}: holds no state for participant '{name}'")
-            p.load_state(states[name])
+        if self.solid.name not in states:
+            raise ResumeError(f"{path}: holds no state for participant '{self.solid.name}'")
+        self.solid.load_state(states[self.solid.name])
+        if self.coupling is not None:
+            if "coupling" not in loop_state:
+                raise ResumeError(f"{path}: was written by an uncoupled run")
+            self.coupling.load_state(loop_state["coupling"])

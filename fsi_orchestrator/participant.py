@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 # Names of exchanged fields (all on interface points, global frame, SI units).
 DISPLACEMENT = "displacement"  # (n, 3) m, from the reference configuration
 VELOCITY = "velocity"  # (n, 3) m/s
+ACCELERATION = "acceleration"  # (n, 3) m/s^2
 FORCE = "force"  # (n, 3) N, nodal forces (conservative: they sum to the total force)
 PRESSURE = "pressure"  # (n,) Pa, net follower pressure (+z face minus -z face sign convention)
 

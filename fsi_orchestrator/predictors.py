@@ -52,6 +52,10 @@ class Predictor:
         self._times: list[float] = []
         self._values: list[dict[str, NDArray]] = []
 
+    @property
+    def has_history(self) -> bool:
+        return bool(self._times)
+
     def record(self, time: float, values: Mapping[str, NDArray]) -> None:
         """Store the converged values at the end ``time`` of a window (copies)."""
         if self._times and not time > self._times[-1]:

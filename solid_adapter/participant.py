@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from fsi_orchestrator.participant import (
+    ACCELERATION,
     DISPLACEMENT,
     FORCE,
     PRESSURE,
@@ -99,6 +100,7 @@ class ShellParticipant:
         return {
             DISPLACEMENT: self.state.x.reshape(n, NDOF)[:, :3].copy(),
             VELOCITY: self.state.v.reshape(n, NDOF)[:, :3].copy(),
+            ACCELERATION: self.state.a.reshape(n, NDOF)[:, :3].copy(),
         }
 
     def monitor(self) -> dict[str, NDArray | float]:

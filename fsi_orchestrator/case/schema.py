@@ -100,6 +100,17 @@ class FluidDriver(StrEnum):
     RELAUNCH = "relaunch"  # each solve restarts from the last converged time folder
 
 
+class Extrapolation(StrEnum):
+    CONSTANT = "constant"
+    LINEAR = "linear"
+    QUADRATIC = "quadratic"
+
+
+class AddedMassModel(StrEnum):
+    POTENTIAL = "potential"
+    STRIP = "strip"
+
+
 class CouplingScheme(StrEnum):
     EXPLICIT = "explicit"
     CONSTANT = "constant"
@@ -416,13 +427,39 @@ class Fluid:
 @dataclass(frozen=True, kw_only=True)
 class Coupling:
     scheme: CouplingScheme = param(CouplingScheme.IQN_ILS_AM, "Partitioned coupling scheme.")
-    relaxation: float = param(
-        0.5, "constant/aitken: (initial) under-relaxation factor.", gt=0, le=1
+    relaxation: float | None = param(
+        None,
+        "constant: the relaxation factor; aitken/iqn-ils: the first iteration's (default 0.5; "
+        "*-am schemes: 1.0, their preconditioned map is contractive).",
+        gt=0,
+        le=1,
     )
     tolerance_rel: float = param(
         1e-4, "Relative convergence tolerance of the exchanged data.", gt=0, lt=1
     )
-    max_iterations: int = param(50, "Coupling iterations per window before failing.", ge=1)
+    max_iterations: int = param(
+        50,
+        "Coupling iterations per window; a window that has not converged by then is accepted, "
+        "counted and reported (divergence - NaN or growth - stops the run).",
+        ge=1,
+    )
+    predictor: Extrapolation = param(
+        Extrapolation.LINEAR, "First iterate of a window from the last windows' forces."
+    )
+    reuse_windows: int = param(8, "iqn-ils: past windows whose secant information is reused.", ge=0)
+    partitioned: bool = param(
+        False,
+        "potential/slender_body: run the liquid as a separate participant through the "
+        "coupling loop (stability studies of the schemes) instead of adding its mass to the "
+        "structure (exact for the linear model, one solve per window).",
+    )
+    added_mass_model: AddedMassModel = param(
+        AddedMassModel.POTENTIAL,
+        "*-am schemes: the fast model whose interface added mass preconditions the coupling.",
+    )
+    added_mass_mesh_level: MeshLevel = param(
+        MeshLevel.COARSE, "*-am schemes, potential: fluid mesh level of the preconditioner."
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

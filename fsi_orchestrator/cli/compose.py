@@ -29,3 +29,73 @@ def shell_with_fast_fluid(case: Case):
     if added is not None:
         model.set_added_mass(added.matrix)
     return model, added
+
+
+def added_mass_for_preconditioning(case: Case, shell_model):
+    """The fast model that preconditions the *-am schemes, on the case's fluid domain."""
+    from fluid_adapter.potential import build_added_mass
+    from fluid_adapter.strip import strip_added_mass
+
+    from ..case.schema import AddedMassModel
+
+    if case.coupling.added_mass_model is AddedMassModel.STRIP:
+        return strip_added_mass(
+            shell_model, case.fluid.density_kg_m3, case.fluid.added_mass_coefficient
+        )
+    fluid = dataclasses.replace(case.fluid, mesh_level=case.coupling.added_mass_mesh_level)
+    if case.fluid.model is FluidModel.OPENFOAM:
+        fluid = dataclasses.replace(fluid, domain=FluidDomain.TANK)
+    return build_added_mass(dataclasses.replace(case, fluid=fluid), shell_model)
+
+
+def coupling_settings(case: Case):
+    from ..coupling import CouplingSettings
+
+    c = case.coupling
+    relaxation = c.relaxation
+    if relaxation is None:  # *-am: the preconditioned map is contractive
+        relaxation = 1.0 if c.scheme.value.endswith("-am") else 0.5
+    return CouplingSettings(
+        scheme=c.scheme.value,
+        relaxation=relaxation,
+        tolerance_rel=c.tolerance_rel,
+        max_iterations=c.max_iterations,
+        predictor=c.predictor.value,
+        reuse_windows=c.reuse_windows,
+    )
+
+
+def is_coupled(case: Case) -> bool:
+    return case.fluid.model is FluidModel.OPENFOAM or (
+        case.coupling.partitioned and case.fluid.model is not FluidModel.NONE
+    )
+
+
+def coupled_setup(case: Case, fluid_factory=None):
+    """(solid participant, Coupling) for a partitioned run. The structure starts on the periodic
+    orbit estimated with the fast added mass; with an *-am scheme it keeps that mass."""
+    from fluid_adapter.fast import fast_added_mass
+    from fluid_adapter.potential.participant import PotentialParticipant
+    from solid_adapter.build import build_shell_model, build_shell_participant
+
+    from ..coupling import Coupling
+
+    settings = coupling_settings(case)
+    model = build_shell_model(case)
+    estimate = added_mass_for_preconditioning(case, model)
+    model.set_added_mass(estimate.matrix)  # for the periodic start
+    solid = build_shell_participant(case, model)
+    if not settings.uses_added_mass:
+        model.set_added_mass(None)
+    if fluid_factory is not None:
+        fluid = fluid_factory(case, solid)
+    else:
+        true_added_mass = fast_added_mass(case, build_shell_model(case))
+        fluid = PotentialParticipant(true_added_mass, solid.interface())
+    coupling = Coupling(
+        fluid,
+        solid.interface().points,
+        settings,
+        estimate.matrix if settings.uses_added_mass else None,
+    )
+    return solid, coupling

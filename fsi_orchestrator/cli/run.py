@@ -16,7 +16,7 @@ from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..loop import OutputSettings, Schedule, WindowLoop
 from .common import EXIT_OK, base_parser, emit, load, run_main
-from .compose import shell_with_fast_fluid
+from .compose import coupled_setup, is_coupled, shell_with_fast_fluid
 from .modal import modal_summary
 
 
@@ -74,15 +74,19 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
 
 
 def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
-    from solid_adapter.build import build_shell_participant
+    if is_coupled(case):
+        if case.fluid.model is FluidModel.OPENFOAM:
+            raise RuntimeError(
+                'fluid.model = "openfoam" is not available in this version; use "potential" '
+                '(fast potential flow) or "none"'
+            )
+        solid, coupling = coupled_setup(case)
+        added = None
+    else:
+        from solid_adapter.build import build_shell_participant
 
-    if case.fluid.model is FluidModel.OPENFOAM:
-        raise RuntimeError(
-            'fluid.model = "openfoam" is not available in this version; use "potential" '
-            '(fast potential flow) or "none"'
-        )
-    model, added = shell_with_fast_fluid(case)
-    solid = build_shell_participant(case, model)
+        model, added = shell_with_fast_fluid(case)
+        solid, coupling = build_shell_participant(case, model), None
     schedule = schedule_of(case)
     settings = OutputSettings(
         directory=output,
@@ -93,13 +97,27 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
     )
     start = time.perf_counter()
     with progress_bar(schedule.n_windows, show_progress) as progress:
-        path = WindowLoop(solid, schedule, settings, progress).run(resume=resume)
+        loop = WindowLoop(solid, schedule, settings, progress, coupling)
+        path = loop.run(resume=resume)
     summary = dynamic_summary(case, path)
-    if added is not None:
-        summary["added_mass_kg"] = added.total()
+    if coupling is not None:
+        summary.update(coupling_summary(path, coupling))
+    if added is not None or coupling is not None:
         summary.update(thrust_estimate(case, solid, path))
     summary["wall_s"] = time.perf_counter() - start
     return summary
+
+
+def coupling_summary(results_path: Path, coupling) -> dict:
+    with h5py.File(results_path, "r") as h5:
+        solves = h5["coupling/fluid_solves"][:, 0]
+        converged = h5["coupling/converged"][:, 0]
+    return {
+        "coupling_scheme": coupling.settings.scheme,
+        "mean_fluid_solves_per_window": float(solves.mean()),
+        "max_fluid_solves_per_window": int(solves.max()),
+        "unconverged_windows": int((converged == 0).sum()) if coupling.settings.implicit else 0,
+    }
 
 
 def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
