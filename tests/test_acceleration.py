@@ -387,7 +387,7 @@ def test_imvj_keeps_the_jacobian_across_windows():
         b = rng.normal(size=n)
         exact = np.linalg.solve(np.eye(n) - A, b)
         x = np.zeros(n)
-        for k in range(1, 30):
+        for k in range(1, 30):  # noqa: B007 -- k is the iteration count used below
             xt = A @ x + b
             if np.linalg.norm(xt - x) < 1e-10 * np.linalg.norm(exact):
                 break
