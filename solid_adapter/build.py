@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
@@ -20,6 +19,7 @@ from .shell import NDOF, ShellModel
 from .solvers import (
     ModalResult,
     NewtonSettings,
+    RayleighDamping,
     TimeIntegrator,
     make_integrator,
     modal_analysis,
@@ -60,12 +60,9 @@ def rayleigh_coefficients(case: Case, model: ShellModel) -> tuple[float, float]:
     return a, b
 
 
-def rayleigh_damping(case: Case, model: ShellModel) -> sp.spmatrix | None:
+def rayleigh_damping(case: Case, model: ShellModel) -> RayleighDamping | None:
     a, b = rayleigh_coefficients(case, model)
-    if a == 0 and b == 0:
-        return None
-    K0 = model.internal(model.zero_state(), np.zeros(2))[1]
-    return a * model.inertia + b * K0
+    return RayleighDamping(a, b) if (a or b) else None
 
 
 def bending_frequencies(model: ShellModel, count: int) -> NDArray:
@@ -97,10 +94,10 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
     if not has_actuators(case):
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
     drive = DriveSignal.from_case(case)
-    x0 = v0 = None
     if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
-        x0, v0 = periodic_start(case, model, drive, loads, integrator)
-    return ShellParticipant(model, integrator, drive.volts, loads, x0=x0, v0=v0)
+        x0, v0, a0 = periodic_start(case, model, drive, loads, integrator)
+        return ShellParticipant(model, integrator, drive.volts, loads, x0=x0, v0=v0, a0=a0)
+    return ShellParticipant(model, integrator, drive.volts, loads)
 
 
 def periodic_start(
@@ -109,7 +106,7 @@ def periodic_start(
     drive: DriveSignal,
     loads: StaticLoads,
     integrator: TimeIntegrator,
-) -> tuple[NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray]:
     """State at t = 0 of the linear periodic response about the mean-voltage equilibrium."""
     mean = mean_volts(drive)
     x_static = solve_static(
@@ -119,7 +116,8 @@ def periodic_start(
         4,
         newton_settings(case),
     )
-    response = periodic_response(model, drive, x_static, integrator.C)
+    damping = integrator.damping.linear(model) if integrator.damping is not None else None
+    response = periodic_response(model, drive, x_static, damping)
     return response.at(0.0)
 
 

@@ -56,14 +56,16 @@ class PeriodicResponse:
     x_static: NDArray
     harmonics: list[tuple[int, NDArray]]  # (k, complex X_k)
 
-    def at(self, t: float) -> tuple[NDArray, NDArray]:
-        """Displacement and velocity at time t."""
-        x, v = self.x_static.copy(), np.zeros_like(self.x_static)
+    def at(self, t: float) -> tuple[NDArray, NDArray, NDArray]:
+        """Displacement, velocity and acceleration at time t."""
+        x, v, a = self.x_static.copy(), np.zeros_like(self.x_static), np.zeros_like(self.x_static)
         for k, X in self.harmonics:
-            phase = np.exp(1j * k * self.omega * t)
+            iw = 1j * k * self.omega
+            phase = np.exp(iw * t)
             x += np.imag(X * phase)
-            v += np.imag(1j * k * self.omega * X * phase)
-        return x, v
+            v += np.imag(iw * X * phase)
+            a += np.imag(iw * iw * X * phase)
+        return x, v, a
 
     def dof_history(self, dofs: NDArray, times: NDArray) -> NDArray:
         """(len(times), len(dofs)) displacement history of some DOFs."""

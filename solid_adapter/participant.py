@@ -48,6 +48,7 @@ class ShellParticipant:
         t0: float = 0.0,
         x0: NDArray | None = None,
         v0: NDArray | None = None,
+        a0: NDArray | None = None,
     ) -> None:
         self.model = model
         self.volts = volts
@@ -58,7 +59,7 @@ class ShellParticipant:
         self.tip_node = model.mesh.nearest_node(*model.layout.tip_point)
         on_axis = np.flatnonzero(np.abs(model.mesh.nodes[:, 1]) < 1e-12 * model.layout.length_m)
         self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
-        self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0)
+        self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0, a0)
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
 
     # --------------------------------------------------------------- loads
@@ -134,6 +135,7 @@ class ShellParticipant:
             "a": s.a.copy(),
             "f_int": s.f_int.copy(),
             "f_ext": s.f_ext.copy(),
+            "f_damp": s.f_damp.copy(),
             "force": self._force.copy(),
             "pressure": self._pressure.copy(),
             "newton_iterations": self.integrator.newton_iterations,
@@ -142,7 +144,7 @@ class ShellParticipant:
     def load_state(self, state: State) -> None:
         self.state = DynamicState(
             float(state["t"]),
-            *(np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext")),
+            *(np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext", "f_damp")),
         )
         self._force = np.array(state["force"], dtype=float)
         self._pressure = np.array(state["pressure"], dtype=float)

@@ -210,6 +210,19 @@ class ShellModel:
         )
         return r, K, Linearization(parts, J, self.enodes)
 
+    def material_stiffness(self, x: NDArray) -> sp.csr_matrix:
+        """The material part of the tangent at x (B^T C B, no stress terms): the objective
+        stiffness a strain-rate (Kelvin-Voigt) damping uses."""
+        X = self.nodal(x)
+        d, J, _ = director(X[:, 3:])
+        parts = self._parts(X[self.enodes, :3], d[self.enodes], np.zeros(2))
+        Kq = sum(p.material_tangent() for p in parts)
+        Je = np.zeros((len(self.enodes), 9, 6, NDOF))
+        Je[:, :, 0, 0] = Je[:, :, 1, 1] = Je[:, :, 2, 2] = 1.0
+        Je[:, :, 3:, 3:] = J[self.enodes]
+        Jb = _block_diag(Je)
+        return self.pattern.assemble(np.transpose(Jb, (0, 2, 1)) @ Kq @ Jb)
+
     @property
     def _h_rows(self) -> NDArray:
         return np.arange(self.n_nodes)[:, None, None] * NDOF + 3 + np.arange(2)[None, :, None]

@@ -156,6 +156,46 @@ def solve_static(
     return x
 
 
+def relax_fast_dofs(
+    model: ShellModel,
+    x: NDArray,
+    rates: list[NDArray],
+    volts: NDArray,
+    load,
+    settings: NewtonSettings,
+) -> tuple[NDArray, list[NDArray]]:
+    """x and its rates (velocity, acceleration) with the fast DOFs - the in-plane translations
+    (membrane) and the rotations (tiny rotary inertia, held by the shear) - in quasi-static
+    equilibrium with the normal translations, which are held: x_fast solves r_fast(x) = 0 and
+    each rate's fast part is -K_ff^-1 K_fs (rate)_slow, that relation's derivative. A state
+    built by linear superposition lacks the in-plane shortening of a bent plate; its membrane
+    and shear forces would otherwise kick the stiff in-plane modes and the massless rotations."""
+    fast = np.ones((model.n_nodes, NDOF), dtype=bool)
+    fast[:, 2] = False
+    fast = fast.ravel() & model.free_dofs
+    slow = ~fast & model.free_dofs
+    x = x.copy()
+    first = None
+    for _ in range(settings.max_iterations):
+        r, K, _ = model.internal(x, volts)
+        r = r - load(x)
+        dx = np.zeros_like(x)
+        dx[fast] = spla.spsolve(sp.csc_matrix(K[fast][:, fast]), -r[fast])
+        x += dx
+        size = np.max(np.abs(dx))
+        first = size if first is None else first
+        if size <= settings.tolerance * max(first, 1e-300) or size < 1e-15:
+            break
+    K = model.internal(x, volts)[1]
+    lu = spla.splu(sp.csc_matrix(K[fast][:, fast]))
+    projected = []
+    for rate in rates:
+        rate = rate.copy()
+        rate[fast] = -lu.solve(K[fast][:, slow] @ rate[slow])
+        projected.append(rate)
+    return x, projected
+
+
 # --------------------------------------------------------------------------- dynamic
 
 
@@ -167,6 +207,7 @@ class DynamicState:
     a: NDArray
     f_int: NDArray  # internal force at (x, volts(t))
     f_ext: NDArray  # external force at (t, x)
+    f_damp: NDArray  # damping force at (x, v)
 
     def copy(self) -> DynamicState:
         return replace(
@@ -176,6 +217,7 @@ class DynamicState:
             a=self.a.copy(),
             f_int=self.f_int.copy(),
             f_ext=self.f_ext.copy(),
+            f_damp=self.f_damp.copy(),
         )
 
 
@@ -201,7 +243,7 @@ def make_integrator(
     kind: str,
     model: ShellModel,
     rho_inf: float = 1.0,
-    damping: sp.spmatrix | None = None,
+    damping: RayleighDamping | None = None,
     settings: NewtonSettings = NewtonSettings(),
 ) -> TimeIntegrator:
     """``kind``: "generalized-alpha", "newmark" or "energy-conserving"."""
@@ -215,16 +257,40 @@ def make_integrator(
     return GeneralizedAlphaIntegrator(model, params, damping, settings)
 
 
+@dataclass(frozen=True)
+class RayleighDamping:
+    """f_d = alpha M v + beta K_mat(x) v: mass-proportional plus stiffness-proportional damping
+    with the material tangent of the current state (a Kelvin-Voigt strain-rate damping). The
+    reference stiffness K0 would not do: under large rotation K0 v of a rigidly turning part is
+    not zero (linear strains are not invariant to finite rotation), and the plate's bending
+    swing would be damped like a strain rate."""
+
+    alpha: float
+    beta: float
+
+    def force(self, model: ShellModel, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]:
+        """Damping force and its derivative with respect to v."""
+        C = self.alpha * model.inertia
+        if self.beta:
+            C = C + self.beta * model.material_stiffness(x)
+        return C @ v, C
+
+    def linear(self, model: ShellModel) -> sp.spmatrix:
+        """alpha M + beta K0, for linear (harmonic, modal) analyses about the flat plate."""
+        K0 = model.internal(model.zero_state(), np.zeros(2))[1]
+        return self.alpha * model.inertia + self.beta * K0
+
+
 class TimeIntegrator:
     """One implicit step at a time; the caller owns the state (so checkpoints are trivial)."""
 
     def __init__(
         self,
         model: ShellModel,
-        damping: sp.spmatrix | None = None,
+        damping: RayleighDamping | None = None,
         settings: NewtonSettings = NewtonSettings(),
     ) -> None:
-        self.model, self.C, self.settings = model, damping, settings
+        self.model, self.damping, self.settings = model, damping, settings
         self.newton_iterations = 0
 
     def initial_state(
@@ -234,10 +300,13 @@ class TimeIntegrator:
         volts: VoltFn,
         x0: NDArray | None = None,
         v0: NDArray | None = None,
+        a0: NDArray | None = None,
     ) -> DynamicState:
         """At rest in static equilibrium under the loads and voltages of t0 (the seed starts
         from zero; a voltage offset switched on at t = 0 would only add a start-up transient),
-        unless x0 / v0 are given."""
+        unless x0 / v0 are given, with the acceleration from the equation of motion. With a0
+        too (a linear periodic start), the fast DOFs of (x0, v0, a0) are first brought into
+        quasi-static balance with the normal displacements (see relax_fast_dofs)."""
         m = self.model
         if x0 is None:
 
@@ -248,13 +317,26 @@ class TimeIntegrator:
             x0 = solve_static(m, load_fn, lambda lam: lam * volts(t0), 4, self.settings)
         x = x0.copy()
         v = np.zeros(m.ndof) if v0 is None else v0.copy()
+        if a0 is not None:
+            x, (v, a) = relax_fast_dofs(
+                m, x, [v, a0], volts(t0), lambda xx: loads(t0, xx, False)[0], self.settings
+            )
+            f_int = m.internal(x, volts(t0), tangent=False)[0]
+            f_ext = loads(t0, x, False)[0]
+            return DynamicState(t0, x, v, a, f_int, f_ext, self._damping_force(x, v))
         f_int = m.internal(x, volts(t0), tangent=False)[0]
         f_ext, _ = loads(t0, x, False)
-        rhs = f_ext - f_int - (self.C @ v if self.C is not None else 0.0)
+        f_damp = self._damping_force(x, v)
         a = np.zeros(m.ndof)
         free = m.free_dofs
+        rhs = f_ext - f_int - f_damp
         a[free] = spla.spsolve(sp.csc_matrix(m.inertia[free][:, free]), rhs[free])
-        return DynamicState(t0, x, v, a, f_int, f_ext)
+        return DynamicState(t0, x, v, a, f_int, f_ext, f_damp)
+
+    def _damping_force(self, x: NDArray, v: NDArray) -> NDArray:
+        if self.damping is None:
+            return np.zeros_like(v)
+        return self.damping.force(self.model, x, v)[0]
 
     max_halvings = 4  # a window whose Newton fails is retried as 2, 4, ... 16 sub-steps
 
@@ -307,13 +389,15 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             f_ext, Kf = loads(t1, x1, tangent)
             r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
-            if self.C is not None:
-                r += self.C @ ((1 - p.alpha_f) * v1 + p.alpha_f * s.v)
+            C = None
+            if self.damping is not None:
+                f_d, C = self.damping.force(m, x1, v1)
+                r += (1 - p.alpha_f) * f_d + p.alpha_f * s.f_damp
             if not tangent:
                 return r, None
             T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
-            if self.C is not None:
-                T = T + c_v * self.C
+            if C is not None:
+                T = T + c_v * C
             return r, T
 
         x_pred = s.x.copy()
@@ -323,7 +407,7 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         v1, a1 = kinematics(x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        return DynamicState(t1, x1, v1, a1, f_int, f_ext)
+        return DynamicState(t1, x1, v1, a1, f_int, f_ext, self._damping_force(x1, v1))
 
 
 class EnergyConservingIntegrator(TimeIntegrator):
@@ -360,15 +444,17 @@ class EnergyConservingIntegrator(TimeIntegrator):
                     w = (f1 - f_mid - 0.5 * (K_mid.T @ dx) - 2.0 * c * Mdx) / denom
             f_ext, Kf = loads(t1, x1, tangent)
             r = (2.0 / dt**2) * (Mdx - dt * (m.inertia @ s.v)) + f_alg - 0.5 * (f_ext + s.f_ext)
-            if self.C is not None:
-                r += self.C @ (dx / dt)
+            C = None
+            if self.damping is not None:
+                f_d, C = self.damping.force(m, s.x + 0.5 * dx, dx / dt)
+                r += f_d
             if not tangent:
                 return r, None
             T = (2.0 / dt**2 + c) * m.inertia + 0.5 * K_mid
             if Kf is not None:
                 T = T - 0.5 * Kf
-            if self.C is not None:
-                T = T + self.C / dt
+            if C is not None:
+                T = T + C / dt
             return (r, T, (Mdx, w)) if w is not None else (r, T)
 
         x1, its = newton(residual, s.x.copy(), m, self.settings, f"at t = {t1:.6g} s")
@@ -376,7 +462,7 @@ class EnergyConservingIntegrator(TimeIntegrator):
         v1 = 2.0 * (x1 - s.x) / dt - s.v
         f_int = m.internal(x1, volts(t1), tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        return DynamicState(t1, x1, v1, (v1 - s.v) / dt, f_int, f_ext)
+        return DynamicState(t1, x1, v1, (v1 - s.v) / dt, f_int, f_ext, self._damping_force(x1, v1))
 
 
 # --------------------------------------------------------------------------- modal

@@ -98,18 +98,25 @@ def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]
 def transient_sweep(
     case: Case, frequencies: list[float], waveforms: list[Waveform], output: Path
 ) -> list[dict]:
+    """One nonlinear run per (waveform, frequency). Under ``mpiexec`` (mpi4py) the runs are
+    dealt round-robin to the ranks and gathered on rank 0; other ranks return []."""
     from .run import run_dynamic
 
-    rows = []
-    for waveform in waveforms:
-        for f in frequencies:
-            summary = run_dynamic(
-                with_drive(case, f, waveform),
-                output / f"{waveform.value}_{f:g}Hz",
-                resume=False,
-                show_progress=False,
-            )
-            rows.append(
+    jobs = [(w, f) for w in waveforms for f in frequencies]
+    comm = mpi_world()
+    rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
+    mine = []
+    for index in range(rank, len(jobs), size):
+        waveform, f = jobs[index]
+        summary = run_dynamic(
+            with_drive(case, f, waveform),
+            output / f"{waveform.value}_{f:g}Hz",
+            resume=False,
+            show_progress=False,
+        )
+        mine.append(
+            (
+                index,
                 {
                     "waveform": waveform.value,
                     "frequency_hz": float(f),
@@ -117,9 +124,31 @@ def transient_sweep(
                     "slender_body_mean_thrust_n": summary.get(
                         "slender_body_mean_thrust_n", float("nan")
                     ),
-                }
+                    "mean_fluid_solves_per_window": summary.get(
+                        "mean_fluid_solves_per_window", 1.0
+                    ),
+                },
             )
-    return rows
+        )
+    gathered = comm.gather(mine, root=0) if comm is not None else [mine]
+    if rank != 0:
+        return []
+    return [row for _, row in sorted(item for part in gathered for item in part)]
+
+
+def mpi_world():
+    """MPI.COMM_WORLD when launched by mpiexec/srun with more than one rank, else None."""
+    import os
+
+    if not any(
+        k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "SLURM_NTASKS")
+    ):
+        return None
+    try:
+        from mpi4py import MPI
+    except ImportError:
+        return None
+    return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
 
 
 def _midline(model) -> np.ndarray:
@@ -159,6 +188,8 @@ def _body(args: argparse.Namespace) -> int:
         rows = linear_sweep(case, frequencies, waveforms)
     else:
         rows = transient_sweep(case, frequencies, waveforms, output)
+        if not rows:  # an MPI rank other than 0: rank 0 writes and prints
+            return EXIT_OK
     write_tables(rows, output)
     if args.json:
         emit({"rows": rows, "wall_s": time.perf_counter() - start, "output": str(output)}, True)
