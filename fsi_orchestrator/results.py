@@ -138,12 +138,15 @@ class VtkSeries:
     ) -> None:
         fname = f"{self.name}_{index:06d}.vtu"
         points = self.mesh.points + displacement
+        n_points, n_cells = len(self.mesh.points), len(self.mesh.cells)
+        arrays = {k: np.asarray(v) for k, v in point_data.items()}
         meshio.write(
             self.directory / fname,
             meshio.Mesh(
                 points,
                 [(self.mesh.cell_type, self.mesh.cells)],
-                point_data={k: np.asarray(v) for k, v in point_data.items()},
+                point_data={k: v for k, v in arrays.items() if len(v) == n_points},
+                cell_data={k: [v] for k, v in arrays.items() if len(v) == n_cells != n_points},
             ),
         )
         self.entries.append((time, fname))

@@ -147,3 +147,11 @@ def test_case_format_doc_is_generated_from_the_schema():
     assert (ROOT / "docs/case_format.md").read_text() == render(), (
         "run: python -m fsi_orchestrator.case.docgen"
     )
+
+
+def test_persistent_driver_refuses_an_implicit_scheme(tmp_path):
+    (tmp_path / "case.toml").write_text(
+        '[fluid]\nmodel = "openfoam"\ndriver = "persistent"\n[coupling]\nscheme = "iqn-ils"\n'
+    )
+    with pytest.raises(CaseError, match='fluid.driver = "persistent".*"relaunch"'):
+        load_case(tmp_path)

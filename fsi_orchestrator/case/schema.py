@@ -416,6 +416,11 @@ class Fluid:
     processes: int = param(
         1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1
     )
+    mesh_scale: float = param(
+        1.0,
+        "openfoam: multiplies every cell size of fluid.mesh_level (1.5: about 1/3 the cells).",
+        gt=0,
+    )
     max_courant: float = param(
         2.0,
         "openfoam: largest Courant number of a fluid time step; each coupling window is split "

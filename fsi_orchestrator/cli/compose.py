@@ -4,6 +4,7 @@ imports the adapters (lazily, so that `--help` and case errors stay fast)."""
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
@@ -56,6 +57,7 @@ def coupling_settings(case: Case):
     if relaxation is None:  # *-am: the preconditioned map is contractive
         relaxation = 1.0 if c.scheme.value.endswith("-am") else 0.5
     return CouplingSettings(
+        **lead_in(case),
         scheme=c.scheme.value,
         relaxation=relaxation,
         tolerance_rel=c.tolerance_rel,
@@ -63,6 +65,23 @@ def coupling_settings(case: Case):
         predictor=c.predictor.value,
         reuse_windows=c.reuse_windows,
     )
+
+
+def lead_in(case: Case) -> dict:
+    """One period of fluid-only lead-in when a CFD fluid meets a structure that starts on its
+    periodic orbit (Coupling.lead_in)."""
+    from ..case.schema import StartMode
+
+    if case.fluid.model is not FluidModel.OPENFOAM or case.time.start is not StartMode.PERIODIC:
+        return {}
+    if case.time.step_s is not None:
+        per_period = max(1, round(1.0 / (case.actuation.frequency_hz * case.time.step_s)))
+    else:
+        per_period = case.time.steps_per_period
+    return {
+        "lead_in_windows": per_period,
+        "lead_in_omega": 2 * math.pi * case.actuation.frequency_hz,
+    }
 
 
 def is_coupled(case: Case) -> bool:
@@ -85,8 +104,9 @@ def coupled_setup(case: Case, fluid_factory=None):
     estimate = added_mass_for_preconditioning(case, model)
     model.set_added_mass(estimate.matrix)  # for the periodic start
     solid = build_shell_participant(case, model)
-    if not settings.uses_added_mass:
-        model.set_added_mass(None)
+    model.set_added_mass(
+        settings.added_mass_scale * estimate.matrix if settings.uses_added_mass else None
+    )
     if fluid_factory is not None:
         fluid = fluid_factory(case, solid)
     else:
@@ -99,3 +119,24 @@ def coupled_setup(case: Case, fluid_factory=None):
         estimate.matrix if settings.uses_added_mass else None,
     )
     return solid, coupling
+
+
+def openfoam_fluid_factory(workdir, *, fresh: bool):
+    """Builds the OpenFOAM participant in ``workdir``: regenerated for a fresh run, reused (its
+    time folders are the fluid's checkpoints) when resuming."""
+    import shutil
+
+    from fluid_adapter.openfoam import build_openfoam_participant, case_schedule
+
+    def factory(case: Case, solid):
+        if fresh and workdir.exists():
+            shutil.rmtree(workdir)
+        workdir.mkdir(parents=True, exist_ok=True)
+        workdir.chmod(0o755)  # as root the persistent driver runs OpenFOAM as `nobody`
+        _, n_windows = case_schedule(case)
+        n_windows += lead_in(case).get("lead_in_windows", 0)
+        return build_openfoam_participant(
+            case, workdir, n_windows=n_windows, mesh_scale=case.fluid.mesh_scale
+        )
+
+    return factory

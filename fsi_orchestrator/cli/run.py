@@ -16,7 +16,7 @@ from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..loop import OutputSettings, Schedule, WindowLoop
 from .common import EXIT_OK, base_parser, emit, load, run_main
-from .compose import coupled_setup, is_coupled, shell_with_fast_fluid
+from .compose import coupled_setup, is_coupled, openfoam_fluid_factory, shell_with_fast_fluid
 from .modal import modal_summary
 
 
@@ -75,12 +75,10 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
 
 def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
     if is_coupled(case):
+        factory = None
         if case.fluid.model is FluidModel.OPENFOAM:
-            raise RuntimeError(
-                'fluid.model = "openfoam" is not available in this version; use "potential" '
-                '(fast potential flow) or "none"'
-            )
-        solid, coupling = coupled_setup(case)
+            factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume)
+        solid, coupling = coupled_setup(case, factory)
         added = None
     else:
         from solid_adapter.build import build_shell_participant
@@ -96,14 +94,24 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         attributes={"case": str(case.directory), "dt_s": schedule.dt},
     )
     start = time.perf_counter()
-    with progress_bar(schedule.n_windows, show_progress) as progress:
-        loop = WindowLoop(solid, schedule, settings, progress, coupling)
-        path = loop.run(resume=resume)
+    try:
+        with progress_bar(schedule.n_windows, show_progress) as progress:
+            loop = WindowLoop(solid, schedule, settings, progress, coupling)
+            path = loop.run(resume=resume)
+    finally:
+        if coupling is not None:
+            coupling.fluid.finalize()
     summary = dynamic_summary(case, path)
     if coupling is not None:
         summary.update(coupling_summary(path, coupling))
+        summary.update(fluid_force_summary(case, path))
     if added is not None or coupling is not None:
         summary.update(thrust_estimate(case, solid, path))
+    if "mean_thrust_n" in summary:
+        summary["thrust_source"] = "openfoam"
+    elif "slender_body_mean_thrust_n" in summary:
+        summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
+        summary["thrust_source"] = "slender_body"
     summary["wall_s"] = time.perf_counter() - start
     return summary
 
@@ -117,6 +125,21 @@ def coupling_summary(results_path: Path, coupling) -> dict:
         "mean_fluid_solves_per_window": float(solves.mean()),
         "max_fluid_solves_per_window": int(solves.max()),
         "unconverged_windows": int((converged == 0).sum()) if coupling.settings.implicit else 0,
+    }
+
+
+def fluid_force_summary(case: Case, results_path: Path) -> dict:
+    """Mean thrust (-F_x, eq. 3-25) and force amplitudes over the last period, where the fluid
+    reports its integrated force (OpenFOAM)."""
+    with h5py.File(results_path, "r") as h5:
+        if "fluid/thrust_n" not in h5:
+            return {}
+        thrust = h5["fluid/thrust_n"][:, 0]
+        force = h5["fluid/force_n"][:]
+    last = slice(-min(len(thrust), windows_per_period(case)), None)
+    return {
+        "mean_thrust_n": float(thrust[last].mean()),
+        "lateral_force_amplitude_n": float(np.ptp(force[last, 2]) / 2),
     }
 
 

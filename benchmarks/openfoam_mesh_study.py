@@ -1,0 +1,76 @@
+"""Mesh-level study of the prescribed-motion thrust at 3 Hz: error against the fine level versus
+run time, to choose the default level (target, issue 4: <= 5 % thrust error).
+
+The fish in its first clamped mode, 20 mm at the tail (seed Sec. 3.4.3), 3 Hz, k-omega SST,
+backward Euler, 2 periods of 32 windows (fluid steps split further where the Courant number
+exceeds fluid.max_courant); mean thrust -F_x over the second period. Also printed: Lighthill's
+elongated-body estimate of the same motion (fluid_adapter.slender_body).
+
+    .venv/bin/python benchmarks/openfoam_mesh_study.py [--levels coarse default fine] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+from fluid_adapter.openfoam.prescribed import (
+    ACOUSTIC_TAIL_AMPLITUDE_M,
+    run_prescribed,
+    slender_body_estimate,
+)
+from fsi_orchestrator.case.loader import case_from_dict
+
+WINDOWS, PERIODS = 32, 2
+
+
+def run_level(level: str, root: Path) -> dict:
+    case = case_from_dict({"fluid": {"model": "openfoam", "mesh_level": level}}, root)
+    result = run_prescribed(
+        case,
+        root / level,
+        amplitude_m=ACOUSTIC_TAIL_AMPLITUDE_M,
+        periods=PERIODS,
+        steps_per_period=WINDOWS,
+    )
+    period = result.force_n[-WINDOWS:]
+    return {
+        "level": level,
+        "cells": result.cells,
+        "mean_thrust_n": result.mean_thrust(WINDOWS),
+        "first_period_thrust_n": float(result.thrust_n[:WINDOWS].mean()),
+        "lateral_force_amplitude_n": float((period[:, 2].max() - period[:, 2].min()) / 2),
+        "wall_s": result.wall_s,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--levels", nargs="+", default=["coarse", "default", "fine"])
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    root = Path(tempfile.mkdtemp(prefix="fishfsi-mesh-study-"))
+    rows = []
+    try:
+        for level in args.levels:
+            rows.append(run_level(level, root))
+            print(json.dumps(rows[-1]), flush=True)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    reference = rows[-1]["mean_thrust_n"]
+    estimate = slender_body_estimate(case_from_dict({}, root))
+    print(f"slender-body estimate of the same motion: {estimate:.4f} N")
+    for row in rows:
+        error = abs(row["mean_thrust_n"] - reference) / abs(reference)
+        print(
+            f"{row['level']:8s} {row['cells']:7d} cells  thrust {row['mean_thrust_n']:.4f} N  "
+            f"error vs {rows[-1]['level']} {error:6.1%}  lateral force amplitude "
+            f"{row['lateral_force_amplitude_n']:.3f} N  wall {row['wall_s']:.0f} s"
+        )
+
+
+if __name__ == "__main__":
+    main()

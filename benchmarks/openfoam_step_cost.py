@@ -1,0 +1,101 @@
+"""Wall time per coupling window against cell count, and the adapter's own share of a window.
+
+For each fluid mesh level (serial): the fish in its first clamped mode at 3 Hz, 20 mm at the
+tail (seed Sec. 3.4.3), 40 windows per period, solved window by window by the persistent driver
+(one pimpleFoam process, handshake per window) and by the relaunch driver (one launch per
+window). Printed: cells, seconds per window, the persistent driver's Python share (writing the
+plate velocity samples, reading and integrating the loads, deleting stale folders), and the
+relaunch overhead. Target (issue 4): adapter share <= 5 % for the persistent driver.
+
+    .venv/bin/python benchmarks/openfoam_step_cost.py [--levels coarse default] [--windows 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from fluid_adapter.openfoam import build_openfoam_participant
+from fluid_adapter.openfoam.prescribed import mode_motion
+from fsi_orchestrator.case.loader import case_from_dict
+from fsi_orchestrator.participant import DISPLACEMENT
+
+WINDOWS_PER_PERIOD = 40
+WARM_UP = 2  # windows not timed (start-up, first solves)
+
+
+def time_driver(level: str, driver: str, windows: int, root: Path) -> dict:
+    case = case_from_dict(
+        {"fluid": {"model": "openfoam", "mesh_level": level, "driver": driver}}, root
+    )
+    dt = 1 / (3.0 * WINDOWS_PER_PERIOD)
+    p = build_openfoam_participant(
+        case, root / f"{level}-{driver}", dt=dt, n_windows=windows + WARM_UP, reuse=False
+    )
+    motion = mode_motion(case, p.interface().points, 0.020, 3.0, ramp_periods=0.5)
+    walls = []
+    for k in range(1, windows + WARM_UP + 1):
+        start = time.perf_counter()
+        p.read_data({DISPLACEMENT: motion.displacement(k * dt)})
+        p.solve(dt)
+        p.write_data()
+        walls.append(time.perf_counter() - start)
+        if k == WARM_UP and driver == "persistent":
+            p.driver.timing = {"adapter_s": 0.0, "solver_s": 0.0}
+    timing = getattr(p.driver, "timing", None)
+    p.finalize()
+    timed = walls[WARM_UP:]
+    row = {
+        "level": level,
+        "driver": driver,
+        "cells": p.mesh_quality.cells,
+        "s_per_window": sum(timed) / len(timed),
+    }
+    if timing:
+        total = timing["adapter_s"] + timing["solver_s"]
+        row["adapter_share"] = timing["adapter_s"] / total
+        row["adapter_ms_per_window"] = 1e3 * timing["adapter_s"] / windows
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--levels", nargs="+", default=["coarse", "default", "fine"])
+    parser.add_argument("--windows", type=int, default=8)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args()
+    root = Path(tempfile.mkdtemp(prefix="fishfsi-bench-"))
+    root.chmod(0o755)  # as root the persistent driver runs OpenFOAM as `nobody`
+    rows = []
+    try:
+        for level in args.levels:
+            for driver in ("persistent", "relaunch"):
+                rows.append(time_driver(level, driver, args.windows, root))
+                print(json.dumps(rows[-1]) if args.json else _line(rows[-1]), flush=True)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    for level in args.levels:
+        pair = {r["driver"]: r for r in rows if r["level"] == level}
+        extra = pair["relaunch"]["s_per_window"] - pair["persistent"]["s_per_window"]
+        print(
+            f"{level}: relaunch overhead {extra:.2f} s per window "
+            f"({extra / pair['persistent']['s_per_window']:.0%} of a persistent window)"
+        )
+
+
+def _line(row: dict) -> str:
+    text = f"{row['level']:8s} {row['driver']:10s} {row['cells']:7d} cells  "
+    text += f"{row['s_per_window']:6.2f} s/window"
+    if "adapter_share" in row:
+        text += (
+            f"  adapter {row['adapter_ms_per_window']:.1f} ms/window = {row['adapter_share']:.1%}"
+        )
+    return text
+
+
+if __name__ == "__main__":
+    main()

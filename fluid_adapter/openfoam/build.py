@@ -1,0 +1,111 @@
+"""Case -> OpenFOAM participant: generate (or reuse) the case folder, decompose, pick a driver."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import FluidDriver
+
+from . import runner
+from .checkmesh import MeshQuality, parse
+from .drivers import PersistentDriver, RelaunchDriver
+from .fishmesh import FISH_PATCHES, TankGeometry, tank_geometry
+from .foamio import write_dict
+from .foamrun import FoamRun
+from .interface import read_interface
+from .motion import write_diffusivity
+from .participant import OpenFoamParticipant
+from .tankcase import flow_settings, generate_tank_case
+
+FINGERPRINT = "fishfsi-case.json"
+
+
+def case_schedule(case: Case) -> tuple[float, int]:
+    """(window size, number of windows) as the run loop computes them from ``[time]``."""
+    t = case.time
+    if t.step_s is not None and t.end_time_s is not None:
+        return t.step_s, max(1, round(t.end_time_s / t.step_s))
+    dt = 1.0 / (case.actuation.frequency_hz * t.steps_per_period)
+    return dt, max(1, round(t.periods * t.steps_per_period))
+
+
+def fingerprint(case: Case, mesh_scale: float, processes: int) -> str:
+    """What the generated folder depends on (geometry and fluid sections, mesh scale)."""
+    data = {
+        "geometry": asdict(case.geometry),
+        "fluid": asdict(case.fluid),
+        "mesh_scale": mesh_scale,
+        "processes": processes,
+    }
+    return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def decompose(path: Path, processes: int, geometry: TankGeometry) -> None:
+    """Hierarchical split along x (the notes: scotch is a stub in this build). decomposePar
+    leaves constant/ alone, so each processor gets its own motion diffusivity."""
+    write_dict(
+        path / "system" / "decomposeParDict",
+        {
+            "numberOfSubdomains": processes,
+            "method": "hierarchical",
+            "coeffs": {"n": [processes, 1, 1], "order": "xyz"},
+            "hierarchicalCoeffs": {"n": [processes, 1, 1], "order": "xyz"},
+        },
+    )
+    runner.utility("decomposePar", path, "-force")
+    for processor in sorted(path.glob("processor[0-9]*")):
+        write_diffusivity(processor, geometry)
+
+
+def prepare_case(
+    case: Case, workdir: Path, *, dt: float, mesh_scale: float, processes: int, reuse: bool
+) -> tuple[bool, MeshQuality]:
+    """Generate the case in ``workdir`` unless an identical one is there. Returns (fresh, q)."""
+    stamp = workdir / FINGERPRINT
+    key = fingerprint(case, mesh_scale, processes)
+    if reuse and stamp.is_file() and json.loads(stamp.read_text()).get("key") == key:
+        return False, parse((workdir / "log.checkMesh").read_text())
+    generated = generate_tank_case(case, workdir, dt=dt, mesh_scale=mesh_scale)
+    if processes > 1:
+        decompose(workdir, processes, tank_geometry(case))
+    stamp.write_text(json.dumps({"key": key, "cells": generated.quality.cells}))
+    return True, generated.quality
+
+
+def build_openfoam_participant(
+    case: Case,
+    workdir: Path,
+    *,
+    dt: float | None = None,
+    n_windows: int | None = None,
+    mesh_scale: float = 1.0,
+    driver: FluidDriver | None = None,
+    processes: int | None = None,
+    reuse: bool = True,
+) -> OpenFoamParticipant:
+    """The fish-tank fluid of ``case`` in ``workdir`` (created, or reused when it was generated
+    from the same geometry/fluid settings, so a killed run can resume from its time folders).
+    ``dt``/``n_windows`` default to the case's schedule; ``mesh_scale`` multiplies every cell
+    size of ``fluid.mesh_level`` (tests use > 1 for small meshes)."""
+    case_dt, case_n = case_schedule(case)
+    dt, n_windows = dt or case_dt, n_windows or case_n
+    processes = processes or case.fluid.processes
+    fresh, quality = prepare_case(
+        case, workdir, dt=dt, mesh_scale=mesh_scale, processes=processes, reuse=reuse
+    )
+    interface = read_interface(workdir, FISH_PATCHES)
+    run = FoamRun(workdir, interface, flow_settings(case), processes)
+    if fresh:
+        run.init_samples()
+    kind = driver or case.fluid.driver
+    if kind is FluidDriver.PERSISTENT:
+        chosen: RelaunchDriver | PersistentDriver = PersistentDriver(run, dt, n_windows)
+    else:
+        chosen = RelaunchDriver(run, dt)
+    participant = OpenFoamParticipant(run, chosen, dt=dt, n_windows=n_windows)
+    participant.mesh_quality = quality
+    return participant

@@ -1,0 +1,33 @@
+"""Errors of the OpenFOAM adapter: each says which step failed, where, and how to fix it."""
+
+from __future__ import annotations
+
+INSTALL_HINT = (
+    "install the Debian package with `apt-get install -y openfoam` (v1912: binaries and "
+    "libraries only), or put an OpenFOAM whose `etc/controlDict` lies in /usr/share/openfoam "
+    "(or $WM_PROJECT_DIR) on PATH"
+)
+
+
+class OpenFoamError(RuntimeError):
+    """Base class of everything the OpenFOAM adapter raises on purpose."""
+
+
+class OpenFoamNotFoundError(OpenFoamError):
+    """An OpenFOAM executable or its etc/ folder is missing."""
+
+
+class OpenFoamRunError(OpenFoamError):
+    """An OpenFOAM program stopped with an error; the case folder is kept for inspection."""
+
+
+class MeshQualityError(OpenFoamError):
+    """checkMesh failed on the generated (or moved) mesh."""
+
+
+class DivergenceError(OpenFoamError):
+    """The flow solution blew up: NaN, or residuals / Courant numbers beyond any sane bound."""
+
+
+class DriverError(OpenFoamError):
+    """A driver was asked for something it cannot do (e.g. going back in time while running)."""

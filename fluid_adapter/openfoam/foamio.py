@@ -1,0 +1,55 @@
+"""Small foamlib helpers: write a whole dictionary file at once, read a patch's geometry.
+
+foamlib edits an existing file in a context manager; a new file is created empty first. The
+mesh files (points, faces, boundary) are read with foamlib too, ASCII or binary.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from foamlib import FoamFieldFile, FoamFile
+from numpy.typing import NDArray
+
+
+def write_dict(path: Path, entries: Mapping[str, Any], *, field: bool = False) -> None:
+    """(Re)write ``path`` with exactly ``entries`` (FoamFile header added by foamlib; a
+    ``"FoamFile": {"class": ...}`` entry only sets the class, e.g. pointVectorField)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("")
+    entries = dict(entries)
+    header = entries.pop("FoamFile", {})
+    cls = FoamFieldFile if field else FoamFile
+    with cls(path) as f:
+        f.update(entries)
+        if "class" in header:
+            f.class_ = header["class"]
+
+
+def update_dict(path: Path, entries: Mapping[str, Any]) -> None:
+    with FoamFile(path) as f:
+        f.update(entries)
+
+
+def read_points(path: Path) -> NDArray[np.float64]:
+    return np.asarray(FoamFile(path)[None], dtype=float).reshape(-1, 3)
+
+
+def read_faces(path: Path) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """``polyMesh/faces`` as (offsets, labels): face i is labels[offsets[i]:offsets[i + 1]]
+    (the layout of a binary faceCompactList; an ASCII faceList is converted to it)."""
+    data = FoamFile(path)[None]
+    if isinstance(data, tuple) and len(data) == 2:
+        return np.asarray(data[0], dtype=np.int64), np.asarray(data[1], dtype=np.int64)
+    sizes = np.array([len(f) for f in data], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    return offsets, np.concatenate([np.asarray(f, dtype=np.int64) for f in data])
+
+
+def read_boundary(path: Path) -> dict[str, dict]:
+    """``constant/polyMesh/boundary`` as {patch: {type, nFaces, startFace, ...}}."""
+    entries = FoamFile(path)[None]
+    return {name: dict(d) for name, d in entries}

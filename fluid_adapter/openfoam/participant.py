@@ -1,0 +1,153 @@
+"""The OpenFOAM fluid as a coupling participant (fsi_orchestrator.participant.Participant).
+
+Interface: the fish patches' points (both faces of the plate share them) and their faces (each
+plate face appears twice, once per side). Reads point displacements (from the reference
+configuration, interface point order); writes nodal forces (each face force split equally among
+its points, so they sum to the total force), plus the face forces, face centres and face
+pressures they came from. Checkpoints are time folders (relaunch driver); the persistent driver
+cannot go back in time and says so.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, State
+
+from .checkmesh import MeshQuality
+from .drivers import PersistentDriver, RelaunchDriver
+from .errors import DriverError
+from .foamrun import FoamRun
+from .loads import SurfaceLoads
+
+FACE_FORCE = "face_force"  # (m, 3) N
+FACE_CENTRES = "face_centres"  # (m, 3) m, moved mesh
+FACE_PRESSURE = "face_pressure"  # (m,) Pa
+
+
+class OpenFoamParticipant:
+    name = "fluid"
+    mesh_quality: MeshQuality | None = None  # checkMesh of the generated mesh
+
+    def __init__(
+        self,
+        run: FoamRun,
+        driver: RelaunchDriver | PersistentDriver,
+        *,
+        dt: float,
+        n_windows: int,
+    ) -> None:
+        self.run, self.driver = run, driver
+        self.dt, self.n_windows = dt, n_windows
+        n = len(run.interface.points0)
+        self._displacement = np.zeros((n, 3))
+        self._loads: SurfaceLoads | None = None
+        self._checkpoint: tuple[NDArray, SurfaceLoads | None] | None = None
+
+    # --------------------------------------------------------------- protocol
+    @property
+    def time(self) -> float:
+        return self.driver.time
+
+    def interface(self) -> InterfaceMesh:
+        return InterfaceMesh(
+            points=self.run.interface.points0.copy(),
+            cells=self.run.interface.faces.copy(),
+            cell_type="quad",
+        )
+
+    def read_data(self, data: Mapping[str, NDArray]) -> None:
+        if DISPLACEMENT not in data:
+            return
+        u = np.asarray(data[DISPLACEMENT], dtype=float)
+        expected = self.run.interface.points0.shape
+        if u.shape != expected:
+            raise ValueError(
+                f"fluid '{DISPLACEMENT}' must have shape {expected} (interface points x 3), "
+                f"got {u.shape}; map the solid's displacement onto fluid.interface() first"
+            )
+        self._displacement = u.copy()
+
+    def solve(self, dt: float) -> None:
+        self._loads = self.driver.advance(self._displacement, dt)
+
+    def write_data(self) -> dict[str, NDArray]:
+        loads = self._require_loads()
+        return {
+            DISPLACEMENT: self._displacement.copy(),
+            FORCE: self.run.interface.nodal_forces(loads.face_forces),
+            FACE_FORCE: loads.face_forces.copy(),
+            FACE_CENTRES: loads.face_centres.copy(),
+            FACE_PRESSURE: loads.pressure_pa.copy(),
+        }
+
+    def monitor(self) -> dict[str, NDArray | float]:
+        """Integrated loads on the fish: force (N), moment about the nose (N m), thrust = -F_x."""
+        loads = self._require_loads()
+        return {"force_n": loads.force, "moment_nm": loads.moment, "thrust_n": loads.thrust}
+
+    def store_checkpoint(self) -> None:
+        self.driver.store()
+        self._checkpoint = (self._displacement.copy(), self._loads)
+
+    def restore_checkpoint(self) -> None:
+        if self._checkpoint is None:
+            raise DriverError("restore_checkpoint called before store_checkpoint")
+        self.driver.restore()
+        u, loads = self._checkpoint
+        self._displacement, self._loads = u.copy(), loads
+
+    def save_state(self) -> dict[str, NDArray | float | int]:
+        self.driver.saved = self.time
+        state: dict[str, NDArray | float | int] = {
+            "t": self.time,
+            "displacement": self.driver.displacement.copy(),
+            "input_displacement": self._displacement.copy(),
+        }
+        if self._loads is not None:
+            state.update(
+                face_forces=self._loads.face_forces.copy(),
+                face_centres=self._loads.face_centres.copy(),
+                face_area_vectors=self._loads.face_area_vectors.copy(),
+                face_pressure=self._loads.pressure_pa.copy(),
+            )
+        return state
+
+    def load_state(self, state: State) -> None:
+        t = float(state["t"])  # type: ignore[arg-type]
+        u = np.array(state["displacement"], dtype=float)
+        self.driver = self._driver_at(t, u)
+        self._displacement = np.array(state["input_displacement"], dtype=float)
+        self._loads = None
+        if "face_forces" in state:
+            self._loads = SurfaceLoads(
+                time=t,
+                face_centres=np.array(state["face_centres"], dtype=float),
+                face_area_vectors=np.array(state["face_area_vectors"], dtype=float),
+                pressure_pa=np.array(state["face_pressure"], dtype=float),
+                face_forces=np.array(state["face_forces"], dtype=float),
+            )
+
+    def finalize(self) -> None:
+        self.driver.close()
+
+    # --------------------------------------------------------------- helpers
+    def _require_loads(self) -> SurfaceLoads:
+        if self._loads is None:
+            raise DriverError("no fluid loads yet: call solve(dt) before write_data()/monitor()")
+        return self._loads
+
+    def _driver_at(self, t: float, u: NDArray) -> RelaunchDriver | PersistentDriver:
+        """A driver continuing from the time folder at ``t`` (later folders are dropped)."""
+        self.driver.close()
+        self.run.remove_times({"0"}, after=t + 1e-6 * self.dt)
+        self.run.remove_samples(self.dt, after=t)
+        if isinstance(self.driver, PersistentDriver):
+            done = round(t / self.dt)
+            return PersistentDriver(self.run, self.dt, self.n_windows - done, t0=t, u0=u)
+        driver = RelaunchDriver(self.run, self.dt, t0=t, u0=u)
+        driver.saved = t
+        return driver

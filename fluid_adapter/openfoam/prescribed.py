@@ -1,0 +1,206 @@
+"""Prescribed (one-way) plate kinematics: the clamped fish's first mode times sin(2 pi f t).
+
+The mode comes from the shell solver (``case.boundary.head = "clamped"``, in vacuum): its nodal
+translations (u_x, u_y, u_z) are interpolated linearly from the shell's nodes to any point of
+the planform and scaled so that the tail tip (trailing edge at y = 0) moves ``amplitude_m``
+along z. Default amplitude: the seed's acoustic-model tail amplitude at 3 Hz, about 20 mm
+(Sec. 3.4.3, Fig. 3.17; shared/reference/seed_data.toml, robot_original.transient_acoustic).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
+
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import HeadCondition
+
+from .checkmesh import MeshQuality
+from .drivers import run_batch, run_mesh_motion
+from .foamrun import FoamRun
+from .loads import SurfaceLoads
+
+ACOUSTIC_TAIL_AMPLITUDE_M = 0.020  # seed Sec. 3.4.3 / Fig. 3.17, "near to 20 mm" at 3 Hz
+LARGEST_TAIL_AMPLITUDE_M = 0.040  # issue 4: the seed's largest tail motion, about +-40 mm
+
+
+def first_mode(case: Case) -> tuple[NDArray, NDArray]:
+    """Shell node positions (n, 2) and the first clamped mode's translations (n, 3), scaled
+    to +1 m of z displacement at the tail tip."""
+    from solid_adapter.build import build_shell_model
+    from solid_adapter.shell import NDOF
+    from solid_adapter.solvers import modal_analysis
+
+    clamped = replace(case, boundary=replace(case.boundary, head=HeadCondition.CLAMPED))
+    model = build_shell_model(clamped)
+    shape = modal_analysis(model, 1).shapes[0].reshape(-1, NDOF)[:, :3]
+    tip = model.mesh.nearest_node(*model.layout.tip_point)
+    return model.mesh.nodes.copy(), shape / shape[tip, 2]
+
+
+def mode_on_points(nodes: NDArray, shape: NDArray, points: NDArray) -> NDArray:
+    """Interpolate a nodal shape to points of the planform (x, y[, z]); nearest value where a
+    point falls outside the shell nodes' triangulation (round-off at the outline)."""
+    xy = points[:, :2]
+    linear = LinearNDInterpolator(nodes, shape)(xy)
+    outside = np.isnan(linear[:, 0])
+    if outside.any():
+        linear[outside] = NearestNDInterpolator(nodes, shape)(xy[outside])
+    return linear
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModeMotion:
+    """u(x, t) = amplitude * ramp(t) * shape(x) * sin(2 pi f t) on a fixed set of points;
+    ramp rises as (1 - cos) over ``ramp_periods`` so the plate does not start with a jerk (an
+    impulsive start rings the pressure for several steps)."""
+
+    shape: NDArray  # (n, 3), tail tip z = 1
+    amplitude_m: float
+    frequency_hz: float
+    ramp_periods: float = 0.0
+
+    def ramp(self, t: float) -> float:
+        t_ramp = self.ramp_periods / self.frequency_hz
+        if t >= t_ramp:
+            return 1.0
+        return 0.5 * (1 - np.cos(np.pi * t / t_ramp))
+
+    def displacement(self, t: float) -> NDArray:
+        s = np.sin(2 * np.pi * self.frequency_hz * t)
+        return self.amplitude_m * self.ramp(t) * s * self.shape
+
+
+def mode_motion(
+    case: Case,
+    points: NDArray,
+    amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
+    frequency_hz: float | None = None,
+    ramp_periods: float = 0.0,
+) -> ModeMotion:
+    nodes, shape = first_mode(case)
+    return ModeMotion(
+        shape=mode_on_points(nodes, shape, points),
+        amplitude_m=amplitude_m,
+        frequency_hz=frequency_hz or case.actuation.frequency_hz,
+        ramp_periods=ramp_periods,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class PrescribedResult:
+    """Loads history of a prescribed-motion run and the last step's surface loads."""
+
+    times_s: NDArray  # (n,)
+    force_n: NDArray  # (n, 3)
+    moment_nm: NDArray  # (n, 3)
+    last: SurfaceLoads  # pressure and face forces at the final time
+    cells: int
+    wall_s: float
+    case_path: Path
+
+    @property
+    def thrust_n(self) -> NDArray:
+        return -self.force_n[:, 0]
+
+    def mean_thrust(self, steps_per_period: int, periods: int = 1) -> float:
+        """Mean of -F_x over the last ``periods`` periods (whole periods: no phase bias)."""
+        return float(self.thrust_n[-steps_per_period * periods :].mean())
+
+
+def _prepare(
+    case: Case, workdir: Path, dt: float, mesh_scale: float
+) -> tuple[FoamRun, MeshQuality]:
+    from .build import prepare_case
+    from .fishmesh import FISH_PATCHES
+    from .interface import read_interface
+    from .tankcase import flow_settings
+
+    _, quality = prepare_case(
+        case, workdir, dt=dt, mesh_scale=mesh_scale, processes=case.fluid.processes, reuse=False
+    )
+    interface = read_interface(workdir, FISH_PATCHES)
+    run = FoamRun(workdir, interface, flow_settings(case), case.fluid.processes)
+    run.init_samples()
+    return run, quality
+
+
+def run_prescribed(
+    case: Case,
+    workdir: Path,
+    *,
+    amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
+    periods: float = 2.0,
+    steps_per_period: int = 40,
+    mesh_scale: float = 1.0,
+    ramp_periods: float = 0.5,
+    frequency_hz: float | None = None,
+    write_every: int | None = None,
+) -> PrescribedResult:
+    """One-way run: the fish moves in its first clamped mode, one pimpleFoam launch."""
+    f = frequency_hz or case.actuation.frequency_hz
+    dt, n = 1.0 / (f * steps_per_period), round(periods * steps_per_period)
+    start = time.perf_counter()
+    run, quality = _prepare(case, workdir, dt, mesh_scale)
+    motion = mode_motion(case, run.interface.points0, amplitude_m, f, ramp_periods)
+    history = run_batch(run, motion.displacement, dt, n, write_every=write_every)
+    return PrescribedResult(
+        times_s=np.array([h.time for h in history]),
+        force_n=np.array([h.force for h in history]),
+        moment_nm=np.array([h.moment for h in history]),
+        last=history[-1],
+        cells=quality.cells,
+        wall_s=time.perf_counter() - start,
+        case_path=workdir,
+    )
+
+
+def check_motion(
+    case: Case,
+    workdir: Path,
+    *,
+    amplitude_m: float = LARGEST_TAIL_AMPLITUDE_M,
+    periods: float = 2.0,
+    steps_per_period: int = 24,
+    mesh_scale: float = 1.0,
+    ramp_periods: float = 0.5,
+    frequency_hz: float | None = None,
+) -> tuple[MeshQuality, list[MeshQuality]]:
+    """The mesh alone through the prescribed motion (no flow): the generated mesh's quality
+    and a full mesh check after every window."""
+    f = frequency_hz or case.actuation.frequency_hz
+    dt, n = 1.0 / (f * steps_per_period), round(periods * steps_per_period)
+    run, quality = _prepare(case, workdir, dt, mesh_scale)
+    motion = mode_motion(case, run.interface.points0, amplitude_m, f, ramp_periods)
+    counts = (quality.cells, quality.points)
+    return quality, run_mesh_motion(run, motion.displacement, dt, n, counts)
+
+
+def slender_body_estimate(
+    case: Case,
+    amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
+    frequency_hz: float | None = None,
+    n_x: int = 120,
+    n_t: int = 64,
+) -> float:
+    """Mean thrust (N) of the same first-mode motion from Lighthill's elongated-body theory
+    (fluid_adapter.slender_body, fixed head): the CFD's first check."""
+    from fluid_adapter.slender_body import slender_body_thrust
+    from solid_adapter.geometry import build_layout
+
+    f = frequency_hz or case.actuation.frequency_hz
+    layout = build_layout(case)
+    x = np.linspace(0.0, layout.length_m, n_x)
+    nodes, shape = first_mode(case)
+    midline = mode_on_points(nodes, shape, np.column_stack([x, 0 * x]))[:, 2]
+    t = np.arange(n_t) / (n_t * f)
+    h = amplitude_m * np.sin(2 * np.pi * f * t)[:, None] * midline[None, :]
+    history = slender_body_thrust(
+        x, layout.height(x) / 2, h, t[1], density_kg_m3=case.fluid.density_kg_m3
+    )
+    return history.mean_thrust_n

@@ -1,0 +1,211 @@
+"""Running OpenFOAM programs: environment, logs, privilege drop, MPI, and errors that carry the
+end of the log.
+
+Every binary of the Debian v1912 package needs ``WM_PROJECT_DIR`` (its ``etc/controlDict``),
+else even blockMesh stops. The ``systemCall`` function object the persistent driver relies on
+is silently disabled for root, so a process that needs it runs as the unprivileged ``nobody``
+(``setpriv``); ``mpirun`` as root needs the ``OMPI_ALLOW_RUN_AS_ROOT`` pair. Each run writes
+``log.<name>`` in the case folder, the folder is kept when a run fails, and the error quotes
+the last lines of the log.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import shutil
+import stat
+import subprocess
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import INSTALL_HINT, DivergenceError, OpenFoamNotFoundError, OpenFoamRunError
+
+DEFAULT_PROJECT_DIR = Path("/usr/share/openfoam")
+NOBODY_UID = 65534  # Debian's nobody:nogroup
+TAIL_LINES = 25
+# Residuals are normalised: anything far above 1 (or a NaN) means the solution has blown up.
+RESIDUAL_LIMIT = 1e3
+COURANT_LIMIT = 1e3
+
+
+def project_dir() -> Path:
+    """The OpenFOAM installation's root (holds etc/controlDict)."""
+    given = os.environ.get("WM_PROJECT_DIR")
+    for candidate in ([Path(given)] if given else []) + [DEFAULT_PROJECT_DIR]:
+        if (candidate / "etc" / "controlDict").is_file():
+            return candidate
+    raise OpenFoamNotFoundError(
+        f"OpenFOAM's etc/controlDict not found under $WM_PROJECT_DIR={given!r} nor "
+        f"{DEFAULT_PROJECT_DIR}: {INSTALL_HINT}"
+    )
+
+
+def executable(name: str) -> str:
+    path = shutil.which(name)
+    if path is None:
+        raise OpenFoamNotFoundError(f"OpenFOAM program `{name}` is not on PATH: {INSTALL_HINT}")
+    return path
+
+
+def is_root() -> bool:
+    return os.geteuid() == 0
+
+
+def foam_env(case: Path, parallel: bool = False) -> dict[str, str]:
+    env = dict(os.environ)
+    env["PWD"] = str(case)
+    env["WM_PROJECT_DIR"] = str(project_dir())
+    env.setdefault("FOAM_SIGFPE", "true")  # a NaN stops the run at once instead of spreading
+    if parallel and is_root():
+        env["OMPI_ALLOW_RUN_AS_ROOT"] = "1"
+        env["OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"] = "1"
+    return env
+
+
+def give_to_nobody(path: Path) -> None:
+    """Let an unprivileged OpenFOAM write in a case folder created by root."""
+    if not is_root():
+        return
+    for parent in path.resolve().parents:
+        if not parent.stat().st_mode & stat.S_IXOTH:
+            raise OpenFoamRunError(
+                f"the persistent driver runs OpenFOAM as 'nobody' (systemCall is disabled for "
+                f"root), but {parent} is not searchable by others "
+                f"(mode {stat.filemode(parent.stat().st_mode)}): put the work folder under a "
+                f"world-searchable directory such as /tmp, or run as a non-root user"
+            )
+    for root, dirs, files in os.walk(path):
+        os.chown(root, NOBODY_UID, NOBODY_UID)
+        for name in dirs + files:
+            os.chown(os.path.join(root, name), NOBODY_UID, NOBODY_UID, follow_symlinks=False)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Command:
+    """One OpenFOAM program call: ``app args`` in ``case``, optionally on MPI ranks."""
+
+    app: str
+    case: Path
+    args: tuple[str, ...] = ()
+    processes: int = 1
+    unprivileged: bool = False  # drop root (needed for systemCall)
+    log_name: str | None = None
+
+    @property
+    def log(self) -> Path:
+        return self.case / f"log.{self.log_name or self.app}"
+
+    @property
+    def cwd(self) -> Path:
+        """Decomposed timeVaryingMappedFixedValue opens ``../constant/boundaryData`` relative
+        to the working directory: start parallel runs from a processor folder."""
+        return self.case / "processor0" if self.processes > 1 else self.case
+
+    def argv(self) -> list[str]:
+        cmd = [executable(self.app), "-case", str(self.case), *self.args]
+        if self.processes > 1:
+            cmd = [executable("mpirun"), "-np", str(self.processes), *cmd, "-parallel"]
+        if self.unprivileged and is_root():
+            drop = [f"--reuid={NOBODY_UID}", f"--regid={NOBODY_UID}", "--clear-groups"]
+            cmd = [executable("setpriv"), *drop, *cmd]
+        return cmd
+
+    def env(self) -> dict[str, str]:
+        return foam_env(self.cwd, parallel=self.processes > 1)
+
+
+def run(command: Command, timeout_s: float | None = None) -> Path:
+    """Run to completion; raise with the log's tail if it fails or diverges. Returns the log."""
+    with open(command.log, "w") as log:
+        try:
+            proc = subprocess.run(
+                command.argv(),
+                cwd=command.cwd,
+                env=command.env(),
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                timeout=timeout_s,
+                check=False,
+            )
+        except subprocess.TimeoutExpired as exc:
+            raise OpenFoamRunError(
+                f"{command.app} in {command.case} ran past {timeout_s} s; "
+                f"last lines of {command.log}:\n{tail(command.log)}"
+            ) from exc
+    check_finished(command, proc.returncode)
+    return command.log
+
+
+def launch(command: Command) -> subprocess.Popen:
+    """Start in the background (own process group, so it can be stopped with its children)."""
+    log = open(command.log, "w")  # closed by the driver with the process
+    return subprocess.Popen(
+        command.argv(),
+        cwd=command.cwd,
+        env=command.env(),
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,
+    )
+
+
+def check_finished(command: Command, returncode: int) -> None:
+    text = tail(command.log)
+    if diverged(text):
+        raise DivergenceError(
+            f"{command.app} diverged in {command.case} (NaN or residuals > {RESIDUAL_LIMIT:g}); "
+            f"reduce the time step (time.steps_per_period) or refine the mesh. Case folder kept. "
+            f"Last lines of {command.log}:\n{text}"
+        )
+    if returncode != 0:
+        raise OpenFoamRunError(
+            f"{command.app} failed (exit {returncode}) in {command.case}; case folder kept. "
+            f"Last lines of {command.log}:\n{text}"
+        )
+
+
+def check_log(command: Command) -> None:
+    """Divergence check of a running solver's latest log lines."""
+    text = tail(command.log, 60)
+    if diverged(text):
+        raise DivergenceError(
+            f"{command.app} diverged in {command.case} (NaN or residuals/Courant > "
+            f"{RESIDUAL_LIMIT:g}); reduce the time step or refine the mesh. Case folder kept. "
+            f"Last lines of {command.log}:\n{tail(command.log)}"
+        )
+
+
+def tail(path: Path, lines: int = TAIL_LINES) -> str:
+    if not path.is_file():
+        return "(no log written)"
+    with open(path, "rb") as f:
+        f.seek(0, os.SEEK_END)
+        f.seek(max(0, f.tell() - 200 * lines))
+        text = f.read().decode(errors="replace")
+    return "\n".join(text.splitlines()[-lines:])
+
+
+_RESIDUAL = re.compile(r"Initial residual = ([^,\s]+)")
+_FPE = re.compile(r"sigFpe::sigHandler|Floating point exception \(core dumped\)")
+_COURANT = re.compile(r"Courant Number mean: \S+ max: (\S+)")
+
+
+def diverged(log_text: str) -> bool:
+    """NaN/FPE trap, or residuals / Courant numbers far beyond any converging run."""
+    if _FPE.search(log_text):
+        return True
+    numbers = [float(v) for v in _RESIDUAL.findall(log_text) + _COURANT.findall(log_text)]
+    return any(math.isnan(v) or v > max(RESIDUAL_LIMIT, COURANT_LIMIT) for v in numbers)
+
+
+def utility(app: str, case: Path, *args: str, log_name: str | None = None) -> Path:
+    return run(Command(app=app, case=case, args=tuple(args), log_name=log_name))
+
+
+def check_available(apps: Sequence[str] = ("blockMesh", "pimpleFoam", "checkMesh")) -> None:
+    project_dir()
+    for app in apps:
+        executable(app)

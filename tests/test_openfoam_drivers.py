@@ -1,0 +1,166 @@
+"""Drivers on a small moving-mesh case (real OpenFOAM): restart fidelity, persistent = relaunch,
+checkpoints, resume.
+
+Exact-behaviour references: a continuous pimpleFoam run of N windows (one launch) for the
+relaunch driver's N one-window launches (issue 4: same force to 1e-3 relative), and the relaunch
+driver for the persistent one (same force history to 1e-3).
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fluid_adapter.openfoam import DriverError, build_openfoam_participant
+from fluid_adapter.openfoam.build import prepare_case
+from fluid_adapter.openfoam.drivers import run_batch
+from fluid_adapter.openfoam.fishmesh import FISH_PATCHES
+from fluid_adapter.openfoam.foamrun import FoamRun, numeric_dirs
+from fluid_adapter.openfoam.interface import read_interface
+from fluid_adapter.openfoam.prescribed import mode_motion
+from fluid_adapter.openfoam.tankcase import flow_settings
+from fsi_orchestrator.case.loader import case_from_dict
+from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.participant import DISPLACEMENT, FORCE
+
+pytestmark = [
+    pytest.mark.openfoam,
+    pytest.mark.skipif(shutil.which("pimpleFoam") is None, reason="OpenFOAM not installed"),
+]
+
+SCALE = 1.5  # coarse level x 1.5 cell size: about 9k cells
+DT, N = 1 / 120, 8  # 3 Hz, 40 windows per period
+
+
+@pytest.fixture(scope="module")
+def setup():
+    # World-searchable: as root the persistent driver runs OpenFOAM as `nobody`.
+    root = Path(tempfile.mkdtemp(prefix="fishfsi-drivers-"))
+    root.chmod(0o755)
+    yield from _setup(root)
+    shutil.rmtree(root, ignore_errors=True)
+
+
+def _setup(root: Path):
+    case = case_from_dict({"fluid": {"model": "openfoam", "mesh_level": "coarse"}}, root)
+    template = root / "template"
+    prepare_case(case, template, dt=DT, mesh_scale=SCALE, processes=1, reuse=False)
+    interface = read_interface(template, FISH_PATCHES)
+    FoamRun(template, interface, flow_settings(case)).init_samples()
+    motion = mode_motion(case, interface.points0, 0.02, 3.0, ramp_periods=0.5)
+    yield case, template, motion
+
+
+def copy_of(template: Path, name: str) -> Path:
+    target = template.parent / name
+    shutil.copytree(template, target, symlinks=True)
+    return target
+
+
+def participant(setup, name: str, driver: FluidDriver):
+    case, template, _ = setup
+    folder = copy_of(template, name)
+    return build_openfoam_participant(
+        case, folder, dt=DT, n_windows=N, mesh_scale=SCALE, driver=driver
+    )
+
+
+def drive(p, motion, windows):
+    forces = []
+    for k in windows:
+        p.read_data({DISPLACEMENT: motion.displacement(k * DT)})
+        p.solve(DT)
+        forces.append(p.monitor()["force_n"])
+    return np.array(forces)
+
+
+def relative(a, b):
+    return np.abs(a - b).max() / np.abs(b).max()
+
+
+@pytest.fixture(scope="module")
+def relaunch_history(setup):
+    p = participant(setup, "relaunch", FluidDriver.RELAUNCH)
+    forces = drive(p, setup[2], range(1, N + 1))
+    folders = [name for _, name in numeric_dirs(p.run.path)]
+    p.finalize()
+    return forces, folders, p.run.time_folder(N * DT, DT)
+
+
+def test_one_window_relaunches_reproduce_a_continuous_run(setup, relaunch_history):
+    case, template, motion = setup
+    folder = copy_of(template, "continuous")
+    run = FoamRun(folder, read_interface(folder, FISH_PATCHES), flow_settings(case))
+    continuous = np.array([s.force for s in run_batch(run, motion.displacement, DT, N)])
+    assert relative(relaunch_history[0], continuous) < 1e-3
+
+
+def test_relaunch_keeps_only_the_restart_folder(relaunch_history):
+    assert relaunch_history[1] == ["0", relaunch_history[2]]
+    assert float(relaunch_history[2]) == pytest.approx(N * DT, rel=1e-13)
+
+
+def test_persistent_driver_gives_the_relaunch_history(setup, relaunch_history):
+    p = participant(setup, "persistent", FluidDriver.PERSISTENT)
+    try:
+        forces = drive(p, setup[2], range(1, N + 1))
+        p.store_checkpoint()
+        p.restore_checkpoint()  # same time: allowed
+    finally:
+        p.finalize()
+    assert relative(forces, relaunch_history[0]) < 1e-3
+
+
+def test_persistent_driver_cannot_go_back_in_time(setup):
+    p = participant(setup, "persistent_restore", FluidDriver.PERSISTENT)
+    try:
+        p.store_checkpoint()
+        drive(p, setup[2], [1])
+        with pytest.raises(DriverError, match="relaunch"):
+            p.restore_checkpoint()
+    finally:
+        p.finalize()
+
+
+def test_restored_window_solves_again_as_if_first_time(setup, relaunch_history):
+    motion = setup[2]
+    p = participant(setup, "implicit", FluidDriver.RELAUNCH)
+    drive(p, motion, [1, 2])
+    p.store_checkpoint()
+    p.read_data({DISPLACEMENT: 1.5 * motion.displacement(3 * DT)})  # a wrong first iterate
+    p.solve(DT)
+    wrong = p.monitor()["force_n"]
+    p.restore_checkpoint()
+    assert p.time == pytest.approx(2 * DT)
+    again = drive(p, motion, [3])[0]
+    p.finalize()
+    assert relative(again, relaunch_history[0][2]) < 1e-9
+    assert relative(wrong, relaunch_history[0][2]) > 1e-2
+
+
+def test_nodal_forces_sum_to_the_total(setup):
+    p = participant(setup, "nodal", FluidDriver.RELAUNCH)
+    drive(p, setup[2], [1])
+    data = p.write_data()
+    p.finalize()
+    np.testing.assert_allclose(data[FORCE].sum(axis=0), p.monitor()["force_n"], atol=1e-12)
+    assert data["face_force"].shape == (p.interface().cells.shape[0], 3)
+
+
+def test_saved_state_resumes_a_killed_run(setup, relaunch_history):
+    case, _, motion = setup
+    p = participant(setup, "resume", FluidDriver.RELAUNCH)
+    drive(p, motion, range(1, 5))
+    state = p.save_state()
+    drive(p, motion, [5])  # the run goes on, then "dies"
+    fresh = build_openfoam_participant(
+        case, p.run.path, dt=DT, n_windows=N, mesh_scale=SCALE, driver=FluidDriver.RELAUNCH
+    )
+    fresh.load_state(state)
+    assert fresh.time == pytest.approx(4 * DT)
+    resumed = drive(fresh, motion, [5, 6])
+    assert relative(resumed, relaunch_history[0][4:6]) < 1e-6

@@ -1,0 +1,112 @@
+"""Errors that say what failed, where, and how to fix it; and the parallel path (real OpenFOAM)."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from foamlib import FoamFile
+
+from fluid_adapter.openfoam import (
+    MeshQualityError,
+    OpenFoamNotFoundError,
+    OpenFoamRunError,
+    build_openfoam_participant,
+    runner,
+)
+from fluid_adapter.openfoam.checkmesh import check_mesh
+from fluid_adapter.openfoam.foamio import read_points, update_dict
+from fluid_adapter.openfoam.prescribed import mode_motion
+from fsi_orchestrator.case.loader import case_from_dict
+from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.participant import DISPLACEMENT
+
+needs_openfoam = pytest.mark.skipif(
+    shutil.which("pimpleFoam") is None, reason="OpenFOAM not installed"
+)
+DT = 1 / 120
+
+
+def small_participant(folder: Path, **fluid):
+    sections = {"fluid": {"model": "openfoam", "mesh_level": "coarse", **fluid}}
+    if fluid.get("driver") == "persistent":  # cannot repeat windows: one solve per window
+        sections["coupling"] = {"scheme": "explicit-am"}
+    case = case_from_dict(sections, folder)
+    return case, build_openfoam_participant(
+        case, folder / "fluid", dt=DT, n_windows=4, mesh_scale=1.5, reuse=False
+    )
+
+
+def test_missing_openfoam_says_how_to_install(monkeypatch, tmp_path):
+    monkeypatch.setattr(runner, "DEFAULT_PROJECT_DIR", tmp_path / "nowhere")
+    monkeypatch.setenv("WM_PROJECT_DIR", str(tmp_path / "nowhere"))
+    with pytest.raises(OpenFoamNotFoundError, match="apt-get install -y openfoam"):
+        runner.project_dir()
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(OpenFoamNotFoundError, match="`pimpleFoam` is not on PATH"):
+        runner.executable("pimpleFoam")
+
+
+def test_divergence_is_recognised_in_a_log():
+    # Lines of a real v1912 crash (pimpleFoam, FOAM_SIGFPE) and of an exploding run.
+    fpe = "#0  Foam::error::printStack(Foam::Ostream&) at ??:?\n#1  Foam::sigFpe::sigHandler(int)"
+    nan = "smoothSolver:  Solving for Ux, Initial residual = nan, Final residual = nan"
+    big = "Courant Number mean: 0.01 max: 2.5e+05"
+    fine = "Courant Number mean: 0.01 max: 1.7\ntrapFpe: Floating point exception trapping enabled"
+    assert runner.diverged(fpe) and runner.diverged(nan) and runner.diverged(big)
+    assert not runner.diverged(fine)
+
+
+@pytest.mark.openfoam
+@needs_openfoam
+def test_solver_crash_quotes_the_log_and_keeps_the_case(tmp_path):
+    _, p = small_participant(tmp_path)
+    update_dict(p.run.path / "system" / "fvSchemes", {"divSchemes": {"default": "none"}})
+    p.read_data({DISPLACEMENT: np.zeros_like(p.interface().points)})
+    with pytest.raises(OpenFoamRunError, match=r"(?s)pimpleFoam failed.*case folder kept.*FATAL"):
+        p.solve(DT)
+    assert (p.run.path / "log.pimpleFoam").is_file() and (p.run.path / "0").is_dir()
+
+
+@pytest.mark.openfoam
+@needs_openfoam
+def test_inverted_mesh_fails_check_mesh_with_a_fix(tmp_path):
+    _, p = small_participant(tmp_path)
+    mesh = p.run.path / "constant" / "polyMesh"
+    points = read_points(mesh / "points")
+    points[p.run.interface.mesh_points, 2] += 0.2  # plate pushed through the side wall
+    broken = p.run.path / "1" / "polyMesh"
+    broken.mkdir(parents=True)
+    shutil.copy(mesh / "points", broken / "points")
+    with FoamFile(broken / "points") as f:
+        f[None] = points
+    with pytest.raises(MeshQualityError, match=r"(?s)failed check.*Fix:"):
+        check_mesh(p.run.path, time="1")
+
+
+@pytest.mark.openfoam
+@needs_openfoam
+@pytest.mark.parametrize("driver", [FluidDriver.RELAUNCH, FluidDriver.PERSISTENT])
+def test_two_ranks_give_the_serial_forces(driver):
+    root = Path(tempfile.mkdtemp(prefix="fishfsi-parallel-"))
+    root.chmod(0o755)  # as root, the persistent driver runs OpenFOAM as `nobody`
+    try:
+        forces = {}
+        for ranks in (1, 2):
+            case, p = small_participant(root / str(ranks), driver=driver.value, processes=ranks)
+            motion = mode_motion(case, p.interface().points, 0.02, 3.0, ramp_periods=0.5)
+            history = []
+            for k in (1, 2):
+                p.read_data({DISPLACEMENT: motion.displacement(k * DT)})
+                p.solve(DT)
+                history.append(p.monitor()["force_n"])
+            p.finalize()
+            forces[ranks] = np.array(history)
+        scale = np.abs(forces[1]).max()
+        assert np.abs(forces[2] - forces[1]).max() / scale < 1e-4
+        assert (root / "2" / "fluid" / "processor1").is_dir()
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
