@@ -131,6 +131,9 @@ class ShellModel:
         self.area_matrix = self._scalar_mass(np.ones_like(mesh.full.weights))
         self.mass = self._mass_matrix()
         self.added_mass: sp.csr_matrix | None = None
+        # True in partitioned *-am coupling: the added mass stands for part of the exchanged
+        # force and is time-weighted like it (solvers.GeneralizedAlphaIntegrator)
+        self.added_mass_as_force = False
         self.inertia = self.mass  # structural mass plus any fluid added mass
 
     def set_added_mass(self, matrix_z: NDArray | None) -> None:

@@ -377,6 +377,12 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         internal = MixedNewtonInternal(m)
         c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
         c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
+        # Partitioned added-mass schemes: the coupling passes g = f + M~ a_k and the structure
+        # carries M~ in its inertia. Inertia is weighted at alpha_m, the force at alpha_f, so
+        # the two M~ terms would leave (alpha_f - alpha_m) M~ (a_k - a_k-1) behind - with M~ ~50
+        # plate masses a spurious term that made converged coupled runs oscillate and grow.
+        # Weighting M~ at alpha_f too makes the converged windows exactly M_s a + K u = f.
+        as_force = m.added_mass is not None and getattr(m, "added_mass_as_force", False)
 
         def kinematics(x1: NDArray) -> tuple[NDArray, NDArray]:
             a1 = (x1 - s.x - dt * s.v) / (p.beta * dt * dt) - (1 - 2 * p.beta) / (2 * p.beta) * s.a
@@ -388,6 +394,8 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             f_int, K = internal(x1, V1, tangent)
             f_ext, Kf = loads(t1, x1, tangent)
             r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
+            if as_force:  # the added mass weighted like the exchanged force (alpha_f)
+                r += m.added_mass @ ((p.alpha_m - p.alpha_f) * (a1 - s.a))
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
             C = None
             if self.damping is not None:
@@ -396,6 +404,8 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             if not tangent:
                 return r, None
             T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
+            if as_force:
+                T = T + (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * m.added_mass
             if C is not None:
                 T = T + c_v * C
             return r, T

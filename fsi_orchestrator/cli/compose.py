@@ -107,6 +107,7 @@ def coupled_setup(case: Case, fluid_factory=None):
     model.set_added_mass(
         settings.added_mass_scale * estimate.matrix if settings.uses_added_mass else None
     )
+    model.added_mass_as_force = settings.uses_added_mass
     if fluid_factory is not None:
         fluid = fluid_factory(case, solid)
     else:

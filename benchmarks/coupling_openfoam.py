@@ -1,0 +1,148 @@
+"""Coupling schemes side by side on the fixed-head fish with the real OpenFOAM (issue 5's
+benchmark): fluid solves per window, wall time, the coupled / prescribed-motion wall-time
+ratio, the non-fluid share of the wall time, and the tail amplitude / force difference to a
+tightly converged reference run.
+
+All runs share one generated mesh (copied), the same fluid-only lead-in onto the periodic orbit
+(timed separately: it *is* a prescribed-motion run of the same windows, one fluid solve each),
+then ``--windows`` coupled windows at 3 Hz.
+
+    .venv/bin/python benchmarks/coupling_openfoam.py [--level coarse] [--mesh-scale 1.5]
+        [--windows 10] [--schemes iqn-ils-am,explicit-am,...] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from fsi_orchestrator.case.loader import load_case  # noqa: E402
+from fsi_orchestrator.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
+from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+# scheme -> extra case overrides; "reference" is the tightly converged run
+RUNS = {
+    "reference": [
+        "coupling.scheme=iqn-ils-am",
+        "coupling.tolerance_rel=1e-7",
+        "coupling.max_iterations=40",
+    ],
+    "constant": [
+        "coupling.scheme=constant",
+        "coupling.relaxation=0.02",
+        "coupling.max_iterations=40",
+    ],
+    "aitken": ["coupling.scheme=aitken", "coupling.relaxation=0.02", "coupling.max_iterations=40"],
+    "iqn-ils": [
+        "coupling.scheme=iqn-ils",
+        "coupling.relaxation=0.02",
+        "coupling.max_iterations=40",
+    ],
+    "iqn-ils-am": ["coupling.scheme=iqn-ils-am"],
+    "explicit-am": ["coupling.scheme=explicit-am"],
+}
+
+
+def one_run(name: str, overrides: list[str], windows: int, folder: Path) -> dict:
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides + RUNS[name])
+    solid, coupling = coupled_setup(case, openfoam_fluid_factory(folder, fresh=False))
+    fluid, dt = coupling.fluid, 1.0 / (case.actuation.frequency_hz * case.time.steps_per_period)
+    fluid_time = 0.0
+    solve = fluid.solve
+
+    def timed_solve(step):
+        nonlocal fluid_time
+        t0 = time.perf_counter()
+        solve(step)
+        fluid_time += time.perf_counter() - t0
+
+    fluid.solve = timed_solve
+    t0 = time.perf_counter()
+    coupling.lead_in(solid, dt)
+    prescribed_s = (time.perf_counter() - t0) / coupling.settings.lead_in_windows
+    fluid_time = 0.0
+    solves, tips, forces = [], [], []
+    t0 = time.perf_counter()
+    status = "ok"
+    try:
+        for w in range(windows):
+            stats = coupling.solve_window(solid, dt, w + 1)  # lead-in done above
+            solves.append(stats["coupling/fluid_solves"])
+            tips.append(solid.monitor()["tip_displacement_m"][2])
+            forces.append(fluid.monitor()["force_n"][2])
+    except CouplingDivergenceError as err:
+        status = f"diverged at window {err.window}"
+    finally:
+        fluid.finalize()
+    wall = time.perf_counter() - t0
+    n = max(1, len(solves))
+    return {
+        "scheme": name,
+        "status": status,
+        "mean_solves": float(np.mean(solves)) if solves else float("nan"),
+        "wall_s_per_window": wall / n,
+        "prescribed_s_per_window": prescribed_s,
+        "ratio_to_prescribed": wall / n / prescribed_s,
+        "non_fluid_share": 1 - fluid_time / wall if wall else float("nan"),
+        "tip_m": tips,
+        "force_z_n": forces,
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--level", default="coarse")
+    ap.add_argument("--mesh-scale", type=float, default=1.5)
+    ap.add_argument("--windows", type=int, default=10)
+    ap.add_argument("--schemes", default=",".join(RUNS))
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    overrides = [f"fluid.mesh_level={args.level}", f"fluid.mesh_scale={args.mesh_scale}"]
+    base = Path(tempfile.mkdtemp(prefix="fishfsi-bench-"))
+    base.chmod(0o755)
+    template = base / "template"
+    # generate the mesh once (a throw-away build), then copy it per run
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides)
+    openfoam_fluid_factory(template, fresh=True)(case, None).finalize()
+    rows = []
+    for name in args.schemes.split(","):
+        folder = base / name
+        shutil.copytree(template, folder, symlinks=True)
+        rows.append(one_run(name, overrides, args.windows, folder))
+        r = rows[-1]
+        print(
+            f"{name:12s} {r['status']:24s} solves/window {r['mean_solves']:5.2f}  "
+            f"{r['wall_s_per_window']:6.2f} s/window  x{r['ratio_to_prescribed']:5.2f} of "
+            f"prescribed  non-fluid {100 * r['non_fluid_share']:4.1f} %",
+            flush=True,
+        )
+    ref = next((r for r in rows if r["scheme"] == "reference"), None)
+    if ref is not None and ref["tip_m"]:
+        for r in rows:
+            k = min(len(r["tip_m"]), len(ref["tip_m"]))
+            if k:
+                tip = np.abs(np.subtract(r["tip_m"][:k], ref["tip_m"][:k])).max()
+                force = np.abs(np.subtract(r["force_z_n"][:k], ref["force_z_n"][:k])).max()
+                r["tip_error_m"] = float(tip)
+                r["force_error_rel"] = float(force / np.abs(ref["force_z_n"][:k]).max())
+                print(
+                    f"{r['scheme']:12s} tip diff {tip * 1e3:.4f} mm  "
+                    f"Fz diff {100 * r['force_error_rel']:.3f} % of max"
+                )
+    if args.json:
+        print(json.dumps(rows))
+    shutil.rmtree(base, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
