@@ -44,6 +44,7 @@ from .participant import ACCELERATION, DISPLACEMENT, FORCE, VELOCITY, Participan
 from .predictors import Predictor
 
 FIELD = "force"
+MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
 ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-ils-am"}
 ADDED_MASS = {"iqn-ils-am", "explicit-am"}
@@ -159,8 +160,11 @@ class Coupling:
         self.criteria.new_window(window)
         solid.store_checkpoint()
         self.fluid.store_checkpoint()
+        self.retries = 0
+        x_good = None  # the last iterate the solvers accepted
         while True:
-            x_tilde = self._guarded_iteration(solid, x, dt, window)
+            x, x_tilde = self._guarded_iteration(solid, x, x_good, dt, window)
+            x_good = x
             status = self.criteria.check({FIELD: x}, {FIELD: x_tilde})
             if status.done:
                 break
@@ -175,25 +179,37 @@ class Coupling:
         self._check_growth(float(np.linalg.norm(x_tilde)), window)
         self.force_scales = (self.force_scales + [self.measure.scale])[-SCALE_MEMORY:]
         return {
-            "coupling/fluid_solves": float(self.criteria.iteration),
+            "coupling/fluid_solves": float(self.criteria.iteration + self.retries),
             "coupling/converged": float(status is WindowStatus.CONVERGED),
             "coupling/residual": float(self.criteria.residuals.get(FIELD, 0.0)),
         }
 
-    def _guarded_iteration(self, solid: Participant, x: NDArray, dt: float, window: int) -> NDArray:
-        """One Gauss-Seidel pass; a solver that fails on the force it was given is reported as
-        what it almost always is here, a diverging coupling."""
-        try:
-            return self._gauss_seidel(solid, x, dt)
-        except (RuntimeError, FloatingPointError) as err:
-            if isinstance(err, CouplingDivergenceError):
-                raise
-            raise CouplingDivergenceError(
-                f"a solver failed ({err}) {self._hint()}",
-                field=FIELD,
-                window=window,
-                iteration=self.criteria.iteration + 1,
-            ) from err
+    def _guarded_iteration(
+        self, solid: Participant, x: NDArray, x_good: NDArray | None, dt: float, window: int
+    ) -> tuple[NDArray, NDArray]:
+        """One Gauss-Seidel pass, returning (the iterate used, x~). A quasi-Newton step can
+        overshoot so far that a solver fails on it (a CFD step at Courant 8): the iterate is then
+        pulled halfway back toward the last accepted one, up to MAX_RETRIES times, from the
+        window's checkpoints. A solver that still fails is reported as what it almost always
+        is here, a diverging coupling."""
+        for attempt in range(MAX_RETRIES + 1):
+            try:
+                return x, self._gauss_seidel(solid, x, dt)
+            except (RuntimeError, FloatingPointError) as err:
+                if isinstance(err, CouplingDivergenceError):
+                    raise
+                if x_good is None or attempt == MAX_RETRIES:
+                    raise CouplingDivergenceError(
+                        f"a solver failed ({err}) {self._hint()}",
+                        field=FIELD,
+                        window=window,
+                        iteration=self.criteria.iteration + 1,
+                    ) from err
+                self.retries += 1
+                x = x_good + 0.5 * (x - x_good)
+                solid.restore_checkpoint()
+                self.fluid.restore_checkpoint()
+        raise AssertionError("unreachable")
 
     def _check_growth(self, norm: float, window: int) -> None:
         """Window-to-window divergence (explicit schemes have no iterations to watch): the
@@ -252,4 +268,3 @@ class Coupling:
         if self.accelerator is not None:
             self.accelerator.load_state(state["accelerator"])
         self.fluid.load_state(state["fluid"])
-

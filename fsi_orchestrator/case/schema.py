@@ -465,6 +465,13 @@ class Coupling:
     added_mass_mesh_level: MeshLevel = param(
         MeshLevel.COARSE, "*-am schemes, potential: fluid mesh level of the preconditioner."
     )
+    added_mass_scale: float = param(
+        1.0,
+        "*-am schemes: share of the fast added mass moved to the structure (any value keeps "
+        "the converged result; the best one matches the fluid's response, docs/coupling.md).",
+        gt=0,
+        le=2,
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

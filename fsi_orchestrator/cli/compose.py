@@ -64,6 +64,7 @@ def coupling_settings(case: Case):
         max_iterations=c.max_iterations,
         predictor=c.predictor.value,
         reuse_windows=c.reuse_windows,
+        added_mass_scale=c.added_mass_scale,
     )
 
 
