@@ -500,6 +500,28 @@ class FlagIntegrator:
         return 0.5 * float(s.v @ (m.mass @ s.v)) + m.strain_energy(s.x) - float(s.f_ext @ s.x)
 
 
+class StaticFlagIntegrator(FlagIntegrator):
+    """Quasi-static "steps": equilibrium f_int(x) = f under the window-end load, no inertia
+    (v = a = 0). For steady FSI (Turek & Hron FSI1), where only the end state counts and the
+    windows are pseudo-time toward it."""
+
+    def __init__(self, model: PlaneStrainModel, settings: NewtonSettings = DEFAULT_NEWTON):
+        super().__init__(model, 1.0, settings)
+
+    def _step(self, s: DynamicState, dt: float, load: NDArray) -> DynamicState:
+        m = self.model
+
+        def residual(x1: NDArray, tangent: bool):
+            f_int, K = m.internal(x1, tangent)
+            return f_int - load, K
+
+        x1, its = newton(residual, s.x, m, self.settings, f"at t = {s.t + dt:.6g} s")
+        self.newton_iterations += its
+        f_int = m.internal(x1, tangent=False)[0]
+        zero = np.zeros_like(x1)
+        return DynamicState(s.t + dt, x1, zero, zero.copy(), f_int, load.copy(), zero.copy())
+
+
 # --------------------------------------------------------------------------- participant
 
 
@@ -652,8 +674,10 @@ def build_flag_participant(
     geometry: FlagGeometry | None = None,
     newton: NewtonSettings = DEFAULT_NEWTON,
     t0: float = 0.0,
+    static: bool = False,
 ) -> FlagParticipant:
-    """The flag as a participant, undeformed and at rest at t0 (Turek & Hron's start)."""
+    """The flag as a participant, undeformed and at rest at t0 (Turek & Hron's start);
+    ``static``: quasi-static windows (StaticFlagIntegrator, ``rho_inf`` unused)."""
     model = build_flag_model(
         density_kg_m3=density_kg_m3,
         shear_modulus_pa=shear_modulus_pa,
@@ -662,7 +686,10 @@ def build_flag_participant(
         elements=elements,
         geometry=geometry,
     )
-    return FlagParticipant(model, FlagIntegrator(model, rho_inf, newton), t0)
+    integrator = (
+        StaticFlagIntegrator(model, newton) if static else FlagIntegrator(model, rho_inf, newton)
+    )
+    return FlagParticipant(model, integrator, t0)
 
 
 def solve_csm(

@@ -182,6 +182,23 @@ def test_heavily_damped_windows_reach_the_static_solution_of_the_forces_read():
     np.testing.assert_allclose(flag.state.x, static, atol=1e-9 * np.abs(static).max())
 
 
+def test_static_windows_give_the_static_solution_at_rest():
+    """static=True: one window under the forces read is solve_static of the same load, with
+    zero velocity and acceleration (what steady FSI1 relies on)."""
+    flag = build_flag_participant(**CSM, elements=(20, 2), static=True)
+    points = flag.interface().points
+    force = np.zeros_like(points)
+    end = np.isclose(points[:, 0], 0.6)
+    force[end] = np.array([0.02, -0.05, 0.0]) / end.sum()
+    flag.read_data({"force": force})
+    flag.solve(0.5)
+    model = flag.model
+    static = solve_static(model, model.interface_load(force[:, :2], 0 * force[:, :2]), 1)
+    np.testing.assert_allclose(flag.state.x, static, atol=1e-12 * np.abs(static).max())
+    assert not flag.state.v.any() and not flag.state.a.any()
+    assert flag.time == 0.5
+
+
 # --------------------------------------------------------------------------- participant
 
 

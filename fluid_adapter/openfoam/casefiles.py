@@ -35,6 +35,9 @@ class FlowSettings:
     moving: bool = True
     n_outer: int = 2
     max_courant: float = 2.0
+    # velocityLaplacian diffusivity tokens: the plate-distance file (motion.py) by default;
+    # e.g. ("quadratic", "inverseDistance", ["flag"]) for a small-motion 2D case
+    motion_diffusivity: tuple = ("file", DIFFUSIVITY_FILE)
 
 
 def control_dict(
@@ -202,7 +205,7 @@ def dynamic_mesh_dict(s: FlowSettings) -> dict:
         "dynamicFvMesh": "dynamicMotionSolverFvMesh",
         "motionSolverLibs": ["fvMotionSolvers"],
         "motionSolver": "velocityLaplacian",
-        "velocityLaplacianCoeffs": {"diffusivity": ("file", DIFFUSIVITY_FILE)},
+        "velocityLaplacianCoeffs": {"diffusivity": s.motion_diffusivity},
     }
 
 

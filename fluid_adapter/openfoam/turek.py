@@ -36,6 +36,8 @@ U_MEAN, RHO, NU = 0.2, 1000.0, 1e-3
 DEPTH = 0.01
 DRAG_REF_N_M, LIFT_REF_N_M = 14.29, 1.119  # Turek & Hron 2006, CFD1
 BODY, INLET, OUTLET, WALLS, SIDES = "body", "inlet", "outlet", "walls", "frontAndBack"
+FLAG, CYLINDER = "flag", "cylinder"  # the body as two patches (FSI: only the flag moves)
+FLAG_ROOT_X = CENTRE[0] + float(np.sqrt(RADIUS**2 - FLAG_HALF**2))  # 0.24899 m
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -48,21 +50,25 @@ class Cfd1Result:
     forces_fo_n_m: np.ndarray  # the forces function object's total, for comparison
 
 
-def _settings() -> FlowSettings:
+def _settings(bodies: tuple[str, ...] = (BODY,), moving: bool = False) -> FlowSettings:
     return FlowSettings(
         nu_m2_s=NU,
         rho_kg_m3=RHO,
         turbulence=Turbulence.LAMINAR,
         time_scheme=TimeScheme.EULER,
-        body_patches=(BODY,),
+        body_patches=bodies,
         wall_patches=(WALLS,),
         open_patches=(OUTLET,),
-        moving=False,
+        moving=moving,
     )
 
 
-def write_gmsh_mesh(path: Path, body_size: float, far_size: float) -> None:
-    """2D quad mesh of the channel minus cylinder and flag, extruded one layer."""
+def write_gmsh_mesh(
+    path: Path, body_size: float, far_size: float, split_body: bool = False
+) -> None:
+    """2D quad mesh of the channel minus cylinder and flag, extruded one layer. The body is
+    one patch ``body``, or with ``split_body`` two: ``cylinder`` and ``flag`` (the flag's two
+    long sides and its free end)."""
     import gmsh
 
     gmsh.initialize(["-noenv"], readConfigFiles=False)
@@ -91,7 +97,7 @@ def write_gmsh_mesh(path: Path, body_size: float, far_size: float) -> None:
             gmsh.option.setNumber(name, value)
         layers = occ.extrude(fluid, 0, 0, DEPTH, numElements=[1], recombine=True)
         occ.synchronize()
-        _physical_groups(layers)
+        _physical_groups(layers, split_body)
         gmsh.model.mesh.generate(3)
         gmsh.write(str(path))
     finally:
@@ -122,12 +128,13 @@ def _size_field(body_curves: list[int], body_size: float, far_size: float) -> No
     field.setAsBackgroundMesh(ramp)
 
 
-def _physical_groups(extruded: list[tuple[int, int]]) -> None:
+def _physical_groups(extruded: list[tuple[int, int]], split_body: bool) -> None:
     import gmsh
 
     volumes = [t for d, t in extruded if d == 3]
     gmsh.model.addPhysicalGroup(3, volumes, name="fluid")
-    groups: dict[str, list[int]] = {BODY: [], INLET: [], OUTLET: [], WALLS: [], SIDES: []}
+    bodies = (FLAG, CYLINDER) if split_body else (BODY,)
+    groups: dict[str, list[int]] = {name: [] for name in (*bodies, INLET, OUTLET, WALLS, SIDES)}
     for _, s in gmsh.model.getEntities(2):
         x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, s)
         eps = 1e-5  # OCC pads bounding boxes by 1e-7
@@ -139,16 +146,18 @@ def _physical_groups(extruded: list[tuple[int, int]]) -> None:
             groups[OUTLET].append(s)
         elif y1 < eps or y0 > HEIGHT - eps:
             groups[WALLS].append(s)
-        else:
+        elif not split_body:
             groups[BODY].append(s)
+        else:  # the cylinder's arcs end at x = FLAG_ROOT_X, the flag's faces reach x = 0.6
+            groups[FLAG if x1 > FLAG_ROOT_X + 0.01 else CYLINDER].append(s)
     for name, surfaces in groups.items():
         gmsh.model.addPhysicalGroup(2, surfaces, name=name)
 
 
-def _fix_patch_types(case: Path) -> None:
+def _fix_patch_types(case: Path, bodies: tuple[str, ...] = (BODY,)) -> None:
     """gmshToFoam makes every patch a ``patch``: set the empty sides and the walls."""
     path = case / "constant" / "polyMesh" / "boundary"
-    types = {SIDES: "empty", WALLS: "wall", BODY: "wall"}
+    types = {SIDES: "empty", WALLS: "wall"} | dict.fromkeys(bodies, "wall")
     file = FoamFile(path)
     entries = [(name, dict(entry)) for name, entry in file[None]]
     missing = set(types) - {name for name, _ in entries}
@@ -161,53 +170,73 @@ def _fix_patch_types(case: Path) -> None:
     file[None] = entries
 
 
-def _initial_fields(case: Path) -> None:
-    inlet = read_interface(case, (INLET,))
-    y = inlet.face_centres()[:, 1]
+def inlet_velocity(case: Path, u_mean: float) -> np.ndarray:
+    """Parabolic inflow of mean ``u_mean`` (maximum 1.5 u_mean) at the inlet face centres."""
+    y = read_interface(case, (INLET,)).face_centres()[:, 1]
     u_in = np.zeros((len(y), 3))
-    u_in[:, 0] = 1.5 * U_MEAN * 4 * y * (HEIGHT - y) / HEIGHT**2  # mean U_MEAN
+    u_in[:, 0] = 1.5 * u_mean * 4 * y * (HEIGHT - y) / HEIGHT**2
+    return u_in
+
+
+def channel_fields(
+    case: Path,
+    *,
+    u_mean: float,
+    bodies: tuple[str, ...],
+    moving: tuple[str, ...] = (),
+    u_internal: np.ndarray | list[float] | None = None,
+    p_internal: np.ndarray | float = 0.0,
+) -> dict[str, dict]:
+    """{name: entries} of 0/U and 0/p: parabolic inflow, p = 0 at the outlet, no slip on the
+    walls and bodies (``moving`` bodies: ``movingWallVelocity``), empty front and back."""
     walls = {"type": "noSlip"}
-    write_dict(
-        case / "0" / "U",
-        {
+    moving_wall = {"type": "movingWallVelocity", "value": [0.0, 0.0, 0.0]}
+    u_bodies = {b: dict(moving_wall) if b in moving else dict(walls) for b in bodies}
+    zero_gradient = {"type": "zeroGradient"}
+    return {
+        "U": {
             "dimensions": [0, 1, -1, 0, 0, 0, 0],
-            "internalField": [0.0, 0.0, 0.0],
+            "internalField": [0.0, 0.0, 0.0] if u_internal is None else u_internal,
             "boundaryField": {
-                INLET: {"type": "fixedValue", "value": u_in},
-                OUTLET: {"type": "zeroGradient"},
+                INLET: {"type": "fixedValue", "value": inlet_velocity(case, u_mean)},
+                OUTLET: dict(zero_gradient),
                 WALLS: walls,
-                BODY: walls,
+                **u_bodies,
                 SIDES: {"type": "empty"},
             },
         },
-        field=True,
-    )
-    write_dict(
-        case / "0" / "p",
-        {
+        "p": {
             "dimensions": [0, 2, -2, 0, 0, 0, 0],
-            "internalField": 0.0,
+            "internalField": p_internal,
             "boundaryField": {
-                INLET: {"type": "zeroGradient"},
+                INLET: dict(zero_gradient),
                 OUTLET: {"type": "fixedValue", "value": 0.0},
-                WALLS: {"type": "zeroGradient"},
-                BODY: {"type": "zeroGradient"},
+                WALLS: dict(zero_gradient),
+                **{b: dict(zero_gradient) for b in bodies},
                 SIDES: {"type": "empty"},
             },
         },
-        field=True,
-    )
+    }
 
 
-def generate_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02) -> None:
+def generate_steady(
+    case: Path,
+    *,
+    u_mean: float = U_MEAN,
+    bodies: tuple[str, ...] = (BODY,),
+    body_size: float = 2.5e-3,
+    far_size: float = 0.02,
+    iterations: int = 3000,
+) -> None:
+    """Mesh the channel and write a simpleFoam case (rigid body) in ``case`` (replaced)."""
     if case.exists():
         shutil.rmtree(case)
-    s = _settings()
-    control = control_dict(s, start=0.0, end=3000.0, dt=1.0)
+    s = _settings(bodies)
+    control = control_dict(s, start=0.0, end=float(iterations), dt=1.0)
     control.update(
         application="simpleFoam",
         writeControl="timeStep",
-        writeInterval=3000,
+        writeInterval=iterations,
         writeFormat="ascii",
         adjustTimeStep=False,
     )
@@ -223,10 +252,20 @@ def generate_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02)
     write_dict(case / "system" / "fvSolution", fv_solution(s, steady=True))
     write_dict(case / "constant" / "transportProperties", {"transportModel": "Newtonian", "nu": NU})
     write_dict(case / "constant" / "turbulenceProperties", {"simulationType": "laminar"})
-    write_gmsh_mesh(case / "cfd1.msh", body_size, far_size)
-    runner.utility("gmshToFoam", case, str(case / "cfd1.msh"))
-    _fix_patch_types(case)
-    _initial_fields(case)
+    write_gmsh_mesh(case / "channel.msh", body_size, far_size, split_body=bodies != (BODY,))
+    runner.utility("gmshToFoam", case, str(case / "channel.msh"))
+    _fix_patch_types(case, bodies)
+    for name, entries in channel_fields(case, u_mean=u_mean, bodies=bodies).items():
+        write_dict(case / "0" / name, entries, field=True)
+
+
+def generate_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02) -> None:
+    generate_steady(case, body_size=body_size, far_size=far_size)
+
+
+def cell_count(case: Path) -> int:
+    """Cells of a one-layer mesh: half the faces of its empty front and back."""
+    return int(read_boundary(case / "constant" / "polyMesh" / "boundary")[SIDES]["nFaces"]) // 2
 
 
 def run_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02) -> Cfd1Result:
@@ -237,7 +276,7 @@ def run_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02) -> C
     body = read_interface(case, (BODY,))
     loads = read_loads(case, last, body, np.zeros_like(body.points0), RHO)
     fo = read_force_dat(case)[-1, 1:4] / DEPTH
-    cells = int(read_boundary(case / "constant" / "polyMesh" / "boundary")[SIDES]["nFaces"]) // 2
+    cells = cell_count(case)
     return Cfd1Result(
         drag_n_m=float(loads.force[0] / DEPTH),
         lift_n_m=float(loads.force[1] / DEPTH),
