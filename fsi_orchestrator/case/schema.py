@@ -424,7 +424,9 @@ class Fluid:
     max_courant: float = param(
         2.0,
         "openfoam: largest Courant number of a fluid time step; each coupling window is split "
-        "into as many fluid steps as this needs (the interface moves linearly within a window).",
+        "into as many fluid steps as this needs (the interface moves linearly within a window). "
+        "Two-way coupled runs want one step per window (a large value): sub-stepped windows "
+        "made converged coupled runs oscillate (docs/coupling.md).",
         gt=0,
     )
 
