@@ -9,6 +9,7 @@ from pathlib import Path
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.case.timing import case_schedule
 
 from . import runner
 from .checkmesh import MeshQuality, parse
@@ -22,15 +23,6 @@ from .participant import OpenFoamParticipant
 from .tankcase import flow_settings, generate_tank_case
 
 FINGERPRINT = "fishfsi-case.json"
-
-
-def case_schedule(case: Case) -> tuple[float, int]:
-    """(window size, number of windows) as the run loop computes them from ``[time]``."""
-    t = case.time
-    if t.step_s is not None and t.end_time_s is not None:
-        return t.step_s, max(1, round(t.end_time_s / t.step_s))
-    dt = 1.0 / (case.actuation.frequency_hz * t.steps_per_period)
-    return dt, max(1, round(t.periods * t.steps_per_period))
 
 
 def fingerprint(case: Case, mesh_scale: float, processes: int) -> str:

@@ -72,15 +72,12 @@ def lead_in(case: Case) -> dict:
     """One period of fluid-only lead-in when a CFD fluid meets a structure that starts on its
     periodic orbit (Coupling.lead_in)."""
     from ..case.schema import StartMode
+    from ..case.timing import windows_per_period
 
     if case.fluid.model is not FluidModel.OPENFOAM or case.time.start is not StartMode.PERIODIC:
         return {}
-    if case.time.step_s is not None:
-        per_period = max(1, round(1.0 / (case.actuation.frequency_hz * case.time.step_s)))
-    else:
-        per_period = case.time.steps_per_period
     return {
-        "lead_in_windows": per_period,
+        "lead_in_windows": windows_per_period(case),
         "lead_in_omega": 2 * math.pi * case.actuation.frequency_hz,
     }
 
@@ -128,7 +125,9 @@ def openfoam_fluid_factory(workdir, *, fresh: bool):
     time folders are the fluid's checkpoints) when resuming."""
     import shutil
 
-    from fluid_adapter.openfoam import build_openfoam_participant, case_schedule
+    from fluid_adapter.openfoam import build_openfoam_participant
+
+    from ..case.timing import case_schedule
 
     def factory(case: Case, solid):
         if fresh and workdir.exists():

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
+from ..case.timing import case_schedule, windows_per_period
 from ..loop import OutputSettings, Schedule, WindowLoop
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import coupled_setup, is_coupled, openfoam_fluid_factory, shell_with_fast_fluid
@@ -21,17 +22,8 @@ from .modal import modal_summary
 
 
 def schedule_of(case: Case) -> Schedule:
-    t = case.time
-    if t.step_s is not None and t.end_time_s is not None:
-        return Schedule(dt=t.step_s, n_windows=max(1, round(t.end_time_s / t.step_s)))
-    dt = 1.0 / (case.actuation.frequency_hz * t.steps_per_period)
-    return Schedule(dt=dt, n_windows=max(1, round(t.periods * t.steps_per_period)))
-
-
-def windows_per_period(case: Case) -> int:
-    if case.time.step_s is not None:
-        return max(1, round(1.0 / (case.actuation.frequency_hz * case.time.step_s)))
-    return case.time.steps_per_period
+    dt, n_windows = case_schedule(case)
+    return Schedule(dt=dt, n_windows=n_windows)
 
 
 @contextmanager
