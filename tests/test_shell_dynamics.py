@@ -105,7 +105,10 @@ def test_shell_participant_checkpoint_is_a_copy(make_case):
     assert solid.time == 0.0
     solid.read_data({FORCE: force})
     solid.solve(1e-3)
-    np.testing.assert_array_equal(solid.write_data()[DISPLACEMENT], moved)
+    # the re-solve starts Newton from the previous answer (a private copy, not the mangled
+    # state): the same solution to Newton's tolerance (1e-8 of the step)
+    scale = np.abs(moved).max()
+    np.testing.assert_allclose(solid.write_data()[DISPLACEMENT], moved, rtol=0, atol=1e-8 * scale)
 
 
 def test_shell_participant_save_load_state_round_trip(make_case):

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import os
 import shutil
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -63,12 +63,18 @@ def numeric_dirs(folder: Path) -> list[tuple[float, str]]:
     return sorted(found)
 
 
+_UNSET = object()
+
+
 @dataclass
 class FoamRun:
     path: Path
     interface: FluidInterface
     settings: FlowSettings
     processes: int = 1
+    # controlDict entries as last written by this object: an implicit window re-solved five
+    # times rewrote the same controlDict five times, 60 ms each through foamlib's parser
+    _controls: dict = field(default_factory=dict, repr=False)
 
     @property
     def rho(self) -> float:
@@ -174,10 +180,14 @@ class FoamRun:
             # one fluid step per window: systemCall's adjustableRunTime control fires at
             # Courant sub-steps too (measured), so the handshake would not mark window ends
             controls["adjustTimeStep"] = False
-        update_dict(self.path / "system" / "controlDict", controls)
+        self.set_controls(**controls)
 
     def set_controls(self, **entries: object) -> None:
-        update_dict(self.path / "system" / "controlDict", entries)
+        """Update controlDict entries; those already written with the same value are skipped."""
+        changed = {k: v for k, v in entries.items() if self._controls.get(k, _UNSET) != v}
+        if changed:
+            update_dict(self.path / "system" / "controlDict", changed)
+            self._controls.update(changed)
 
     def command(self, unprivileged: bool = False) -> runner.Command:
         return runner.Command(
