@@ -64,8 +64,8 @@ def factorize(A: sp.csc_matrix) -> spla.SuperLU:
     SuperLU's symmetric mode - minimum degree on A^T + A, pivots on the diagonal - applies.
     With the dense fluid added-mass block of the coupled fish (2080 DOFs) it factors in
     0.018 s with 0.37 M entries instead of 0.12 s and 1.5 M with the default column ordering
-    and partial pivoting (benchmarks/shell_newton.py). A vanishing or tiny pivot falls back to
-    partial pivoting."""
+    and partial pivoting (benchmarks/shell_coupled_solve.py). A vanishing or tiny pivot falls
+    back to partial pivoting."""
     try:
         lu = spla.splu(
             A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
@@ -482,7 +482,7 @@ class EnergyConservingIntegrator(TimeIntegrator):
     def _step(
         self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn, guess: NDArray | None
     ) -> DynamicState:
-        m = self.model
+        m = self.model  # starts from s.x whatever the guess (the midpoint tangent needs no help)
         t1 = s.t + dt
         V = volts(s.t + 0.5 * dt)
         pi0 = m.strain_energy(s.x, V)
