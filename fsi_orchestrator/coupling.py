@@ -42,6 +42,7 @@ from .convergence import (
 from .mapping import InterfaceMapping
 from .participant import ACCELERATION, DISPLACEMENT, FORCE, VELOCITY, Participant
 from .predictors import Predictor
+from .start_orbit import LeadInSamples, ModalFit, StartOrbit, fit_modal_force
 
 FIELD = "force"
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
@@ -102,8 +103,11 @@ class Coupling:
         solid_points: NDArray,
         settings: CouplingSettings,
         added_mass_z: NDArray | None = None,
+        start_orbit: StartOrbit | None = None,
     ) -> None:
         self.fluid, self.settings = fluid, settings
+        self.start_orbit = start_orbit if settings.lead_in_windows > 0 else None
+        self.start_fit: ModalFit | None = None
         fluid_points = fluid.interface().points
         self.mapping = InterfaceMapping.from_points(solid_points[:, :2], fluid_points[:, :2])
         self.added_mass_z = (
@@ -132,24 +136,65 @@ class Coupling:
         """Fluid-only lead-in before window 0. The structure starts on its (fast-model)
         periodic orbit with displacement u0 and velocity v0 while the CFD's plate is flat and
         its liquid at rest: jumping to u0 in one window would move the plate at metres per
-        second. Instead the fluid follows u(t) = r(t) (u0 cos wt + v0/w sin wt) over
-        t in [-T_lead, 0], r a smooth ramp from 0 to 1 over the first half, so at t = 0 it
-        arrives with the structure's position and velocity and a developed flow. Prescribed
-        motion: the structure is not advanced and its time is untouched."""
+        second. Instead the fluid follows u(t) = r(t) (u0 cos wt + v0/w sin wt) over one
+        period, r a smooth ramp from 0 to 1 over its first half, so at t = 0 it arrives with
+        the structure's position and velocity and a developed flow. With a ``start_orbit``
+        the fluid's force over the second half corrects the structure's orbit
+        (fsi_orchestrator.start_orbit), and a second period blends the motion from the old
+        orbit into the new one. Prescribed motion: the structure is not advanced and its
+        time is untouched."""
         n, omega = self.settings.lead_in_windows, self.settings.lead_in_omega
         if n <= 0 or omega <= 0:
             return
-        motion = solid.write_data()
-        u0 = self.mapping.consistent(motion[DISPLACEMENT])
-        v0 = self.mapping.consistent(motion[VELOCITY])
+        old = _orbit(solid.write_data(), omega)
+        times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
-        for k in range(1, n + 1):
-            t = (k - n) * dt  # -T_lead + dt ... 0
-            s = min(1.0, (t + n * dt) / half)
-            ramp = s * s * s * (10 - 15 * s + 6 * s * s)  # smoothstep C2
-            u = ramp * (u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t))
-            self.fluid.read_data({DISPLACEMENT: u})
+
+        def ramped(t: float) -> NDArray:
+            return _smoothstep((t - times[0] + dt) / half) * old(t)
+
+        if self.start_orbit is None:
+            self._follow(ramped, times, dt)
+            return
+        samples = self._follow(ramped, times, dt, record_from=times[0] - dt + half)
+        self.start_fit = fit_modal_force(
+            samples, self.start_orbit.shape_z, self.start_orbit.added_mass_z
+        )
+        self.start_orbit.restart(self.start_fit)
+        new = _orbit(solid.write_data(), omega)
+
+        def blended(t: float) -> NDArray:
+            r = _smoothstep((t - times[0] + dt) / (n * dt))
+            return (1 - r) * old(t) + r * new(t)
+
+        self._follow(blended, times, dt)
+
+    def _follow(
+        self, motion, times: list[float], dt: float, record_from: float | None = None
+    ) -> LeadInSamples | None:
+        """The fluid alone through a prescribed interface motion u(t) (solid nodes); the
+        velocity and acceleration it is also given are central differences of u."""
+        h = 1e-4 * dt
+        rows = []
+        for t in times:
+            u = motion(t)
+            v = (motion(t + h) - motion(t - h)) / (2 * h)
+            a = (motion(t + h) - 2 * u + motion(t - h)) / h**2
+            self.fluid.read_data(
+                {
+                    DISPLACEMENT: self.mapping.consistent(u),
+                    VELOCITY: self.mapping.consistent(v),
+                    ACCELERATION: self.mapping.consistent(a),
+                }
+            )
             self.fluid.solve(dt)
+            if record_from is not None and t >= record_from - 1e-9 * dt:
+                f = self.mapping.conservative(self.fluid.write_data()[FORCE])
+                rows.append((t, u[:, 2], v[:, 2], a[:, 2], f[:, 2]))
+        if record_from is None:
+            return None
+        t, u, v, a, f = (np.array(c) for c in zip(*rows, strict=True))
+        return LeadInSamples(t, u, v, a, f)
 
     # ------------------------------------------------------------------ one window
     def solve_window(self, solid: Participant, dt: float, window: int) -> dict[str, float]:
@@ -268,3 +313,15 @@ class Coupling:
         if self.accelerator is not None:
             self.accelerator.load_state(state["accelerator"])
         self.fluid.load_state(state["fluid"])
+
+
+def _smoothstep(s: float) -> float:
+    """C2 ramp from 0 (s <= 0) to 1 (s >= 1)."""
+    s = min(1.0, max(0.0, s))
+    return s * s * s * (10 - 15 * s + 6 * s * s)
+
+
+def _orbit(motion: dict[str, NDArray], omega: float):
+    """u(t) = u0 cos wt + v0/w sin wt through the structure's interface state at t = 0."""
+    u0, v0 = motion[DISPLACEMENT], motion[VELOCITY]
+    return lambda t: u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +12,7 @@ from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
 from .geometry import build_layout
-from .harmonic import mean_volts, periodic_response
+from .harmonic import ModalCorrection, PeriodicResponse, mean_volts, periodic_response
 from .mesh import build_mesh
 from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
@@ -108,6 +109,19 @@ def periodic_start(
     integrator: TimeIntegrator,
 ) -> tuple[NDArray, NDArray, NDArray]:
     """State at t = 0 of the linear periodic response about the mean-voltage equilibrium."""
+    return periodic_orbit(case, model, drive, loads, integrator).at(0.0)
+
+
+def periodic_orbit(
+    case: Case,
+    model: ShellModel,
+    drive: DriveSignal,
+    loads: StaticLoads,
+    integrator: TimeIntegrator,
+    correction: ModalCorrection | None = None,
+) -> PeriodicResponse:
+    """The linear periodic response about the mean-voltage equilibrium, with an optional
+    fluid force the inertia does not hold (see ModalCorrection)."""
     mean = mean_volts(drive)
     x_static = solve_static(
         model,
@@ -117,8 +131,67 @@ def periodic_start(
         newton_settings(case),
     )
     damping = integrator.damping.linear(model) if integrator.damping is not None else None
-    response = periodic_response(model, drive, x_static, damping)
-    return response.at(0.0)
+    return periodic_response(model, drive, x_static, damping, correction=correction)
+
+
+class CorrectableStart:
+    """The structure's side of the start correction (fsi_orchestrator.start_orbit): the
+    periodic orbit the shell started on, computed with the fast added mass in its inertia,
+    and a restart on that orbit with the fluid's fitted extra inertia and damping."""
+
+    def __init__(
+        self, case: Case, model: ShellModel, solid: ShellParticipant, added_mass_z: NDArray
+    ) -> None:
+        self.case, self.model, self.solid = case, model, solid
+        self._added_mass_z = added_mass_z
+        with self._start_inertia():
+            orbit = self._orbit(None)
+        fundamental = orbit.harmonics[0][1].reshape(-1, NDOF)[:, 2]
+        tip = fundamental[solid.tip_node]
+        # the in-phase part of the tail's motion: the shape the lead-in swings along
+        shape = np.real(fundamental * np.conj(tip) / abs(tip))
+        self._shape_z = shape / np.linalg.norm(shape)
+
+    @property
+    def shape_z(self) -> NDArray:
+        return self._shape_z
+
+    @property
+    def added_mass_z(self) -> NDArray:
+        return self._added_mass_z
+
+    def restart(self, fit) -> None:
+        def on_z(values: NDArray) -> NDArray:
+            full = np.zeros(self.model.ndof)
+            full[2::NDOF] = values
+            return full
+
+        correction = ModalCorrection(
+            on_z(self._shape_z), on_z(fit.mass_z), on_z(fit.damping_z), fit.amplitude_m
+        )
+        with self._start_inertia():
+            self.solid.restart(*self._orbit(correction).at(self.solid.time))
+
+    def _orbit(self, correction: ModalCorrection | None):
+        return periodic_orbit(
+            self.case,
+            self.model,
+            DriveSignal.from_case(self.case),
+            static_loads(self.case, self.model),
+            self.solid.integrator,
+            correction,
+        )
+
+    @contextmanager
+    def _start_inertia(self):
+        """The model as the periodic start saw it: the fast added mass in the inertia."""
+        saved = (self.model.added_mass, self.model.inertia, self.model.added_mass_as_force)
+        self.model.set_added_mass(self._added_mass_z)
+        self.model.added_mass_as_force = False
+        try:
+            yield
+        finally:
+            self.model.added_mass, self.model.inertia, self.model.added_mass_as_force = saved
 
 
 @dataclass(frozen=True)

@@ -75,28 +75,78 @@ class PeriodicResponse:
         return out
 
 
+@dataclass(frozen=True)
+class ModalCorrection:
+    """A fluid force the inertia does not hold, driven by the motion along one unit shape e
+    (full DOF vectors): f = -p s'' - d s', s = e . x. The damping part is proportional to the
+    amplitude of s (the equivalent linear damping of a quadratic drag) when
+    ``reference_amplitude_m`` is set: d(|S|) = d |S| / reference_amplitude_m."""
+
+    shape: NDArray
+    mass_force: NDArray  # p
+    damping_force: NDArray  # d
+    reference_amplitude_m: float | None = None
+
+
 def periodic_response(
     model: ShellModel,
     drive: DriveSignal,
     x_static: NDArray,
     damping: sp.spmatrix | None = None,
     n_harmonics: int = 15,
+    correction: ModalCorrection | None = None,
 ) -> PeriodicResponse:
-    """Linear steady state about ``x_static`` (the equilibrium under the mean voltages)."""
+    """Linear steady state about ``x_static`` (the equilibrium under the mean voltages). A
+    ``correction`` adds the rank-one term (-w^2 p + i w d) e^T to each harmonic's operator
+    (Sherman-Morrison); an amplitude-dependent damping is resolved for the fundamental."""
     omega = 2 * np.pi * drive.frequency_hz
     K = model.internal(model.zero_state(), np.zeros(2))[1]
     load = harmonic_load(model, drive)
     free = model.free_dofs
-    harmonics = []
+    solved = []  # (k, w, A^-1 F, A^-1 p, A^-1 d)
     for k, c in harmonic_amplitudes(drive, n_harmonics):
         w = k * omega
         A = K - w**2 * model.inertia
         if damping is not None:
             A = A + 1j * w * damping
+        solve = spla.factorized(sp.csc_matrix(A[free][:, free]))
+        y_p = solve(correction.mass_force[free]) if correction else None
+        y_d = solve(correction.damping_force[free]) if correction else None
+        solved.append((k, w, solve(c * load[free]), y_p, y_d))
+    sigma = _damping_scale(correction, free, solved) if correction else 1.0
+    harmonics = []
+    for k, w, y_f, y_p, y_d in solved:
         X = np.zeros(model.ndof, dtype=complex)
-        X[free] = spla.spsolve(sp.csc_matrix(A[free][:, free]), c * load[free])
+        X[free] = y_f
+        if correction is not None:
+            e = correction.shape[free]
+            y_g = -(w**2) * y_p + 1j * w * sigma * y_d
+            X[free] -= y_g * (e @ y_f) / (1 + e @ y_g)
         harmonics.append((k, X))
     return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
+
+
+def _damping_scale(correction: ModalCorrection, free: NDArray, solved: list) -> float:
+    """sigma = |S(sigma)| / S_ref for an amplitude-proportional damping, by bisection (|S|
+    falls as the damping grows); S = e . X of the fundamental = s0 / (1 + e . A^-1 g)."""
+    if correction.reference_amplitude_m is None:
+        return 1.0
+    _, w, y_f, y_p, y_d = solved[0]
+    e = correction.shape[free]
+    s0, sp_, sd = e @ y_f, e @ y_p, e @ y_d
+
+    def amplitude(sigma: float) -> float:
+        return abs(s0 / (1 + -(w**2) * sp_ + 1j * w * sigma * sd))
+
+    per_amplitude = 1.0 / correction.reference_amplitude_m
+    lo, hi = 0.0, per_amplitude * amplitude(0.0)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if mid > per_amplitude * amplitude(mid):
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
 
 
 def mean_volts(drive: DriveSignal) -> NDArray:

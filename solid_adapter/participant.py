@@ -66,6 +66,13 @@ class ShellParticipant:
         # it equals the state, i.e. the usual start
         self._answer: NDArray | None = None
 
+    def restart(self, x0: NDArray, v0: NDArray, a0: NDArray) -> None:
+        """Start again at the initial time from another state (a corrected periodic orbit)."""
+        self.state = self.integrator.initial_state(
+            self.state.t, self.external_load, self.volts, x0, v0, a0
+        )
+        self._checkpoint, self._answer = None, None
+
     # --------------------------------------------------------------- loads
     def external_load(
         self, t: float, x: NDArray, tangent: bool

@@ -474,6 +474,12 @@ class Coupling:
         gt=0,
         le=2,
     )
+    start_correction: bool = param(
+        True,
+        "openfoam with time.start = periodic: fit the liquid's extra inertia and damping over "
+        "the lead-in and start the structure on the corrected orbit (one more lead-in period; "
+        "docs/coupling.md).",
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -74,12 +74,22 @@ def lead_in(case: Case) -> dict:
     from ..case.schema import StartMode
     from ..case.timing import windows_per_period
 
-    if case.fluid.model is not FluidModel.OPENFOAM or case.time.start is not StartMode.PERIODIC:
+    if (
+        case.fluid.model is not FluidModel.OPENFOAM
+        or case.time.start is not StartMode.PERIODIC
+        or case.actuation.ramp_periods > 0  # then the structure starts at rest
+    ):
         return {}
     return {
         "lead_in_windows": windows_per_period(case),
         "lead_in_omega": 2 * math.pi * case.actuation.frequency_hz,
     }
+
+
+def lead_in_fluid_windows(case: Case) -> int:
+    """Fluid solves before window 0: one lead-in period, two with the start correction."""
+    n = lead_in(case).get("lead_in_windows", 0)
+    return 2 * n if case.coupling.start_correction else n
 
 
 def is_coupled(case: Case) -> bool:
@@ -93,7 +103,7 @@ def coupled_setup(case: Case, fluid_factory=None):
     orbit estimated with the fast added mass; with an *-am scheme it keeps that mass."""
     from fluid_adapter.fast import fast_added_mass
     from fluid_adapter.potential.participant import PotentialParticipant
-    from solid_adapter.build import build_shell_model, build_shell_participant
+    from solid_adapter.build import CorrectableStart, build_shell_model, build_shell_participant
 
     from ..coupling import Coupling
 
@@ -111,11 +121,15 @@ def coupled_setup(case: Case, fluid_factory=None):
     else:
         true_added_mass = fast_added_mass(case, build_shell_model(case))
         fluid = PotentialParticipant(true_added_mass, solid.interface())
+    start = None
+    if case.coupling.start_correction and settings.lead_in_windows > 0:
+        start = CorrectableStart(case, model, solid, estimate.matrix)
     coupling = Coupling(
         fluid,
         solid.interface().points,
         settings,
         estimate.matrix if settings.uses_added_mass else None,
+        start_orbit=start,
     )
     return solid, coupling
 
@@ -135,7 +149,7 @@ def openfoam_fluid_factory(workdir, *, fresh: bool):
         workdir.mkdir(parents=True, exist_ok=True)
         workdir.chmod(0o755)  # as root the persistent driver runs OpenFOAM as `nobody`
         _, n_windows = case_schedule(case)
-        n_windows += lead_in(case).get("lead_in_windows", 0)
+        n_windows += lead_in_fluid_windows(case)
         return build_openfoam_participant(
             case, workdir, n_windows=n_windows, mesh_scale=case.fluid.mesh_scale
         )

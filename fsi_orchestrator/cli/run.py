@@ -112,7 +112,11 @@ def coupling_summary(results_path: Path, coupling) -> dict:
     with h5py.File(results_path, "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         converged = h5["coupling/converged"][:, 0]
+    start = {}
+    if coupling.start_fit is not None:
+        start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
     return {
+        **start,
         "coupling_scheme": coupling.settings.scheme,
         "mean_fluid_solves_per_window": float(solves.mean()),
         "max_fluid_solves_per_window": int(solves.max()),
