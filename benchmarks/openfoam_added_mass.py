@@ -12,7 +12,8 @@ fluid mesh level ``--potential-level``). Why the coupled tail swings about half 
 potential-flow estimate, and what the start correction (fsi_orchestrator.start_orbit) fits.
 
     .venv/bin/python benchmarks/openfoam_added_mass.py [--level coarse]
-        [--amplitudes-mm 1 7.8 17.8] [--potential-level coarse] [--json]
+        [--amplitudes-mm 1 7.8 17.8] [--potential-level coarse] [--turbulence kOmegaSST]
+        [--json]
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ def main() -> None:
     ap.add_argument("--level", default="coarse")
     ap.add_argument("--amplitudes-mm", type=float, nargs="+", default=[1.0, 7.8, 17.8])
     ap.add_argument("--potential-level", default="coarse")
+    ap.add_argument("--turbulence", default="kOmegaSST", help="kOmegaSST, Smagorinsky, laminar")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     case = load_case(
@@ -74,6 +76,7 @@ def main() -> None:
         [
             f"fluid.mesh_level={args.level}",
             f"coupling.added_mass_mesh_level={args.potential_level}",
+            f"fluid.turbulence={args.turbulence}",
         ],
     )
     m_pot = potential_mass(case)
@@ -88,7 +91,10 @@ def main() -> None:
     if args.json:
         print(json.dumps({"potential_mass_kg": m_pot, "rows": rows}, indent=1))
         return
-    print(f"potential model ({args.potential_level}): {m_pot:.4f} kg; OpenFOAM ({args.level}):")
+    print(
+        f"potential model ({args.potential_level}): {m_pot:.4f} kg; "
+        f"OpenFOAM ({args.level}, {args.turbulence}):"
+    )
     print(f"{'tail [mm]':>9} {'m_cfd [kg]':>10} {'/ m_pot':>8} {'c/(w m)':>8} {'thrust [N]':>10}")
     for r in rows:
         print(
