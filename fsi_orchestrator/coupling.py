@@ -49,6 +49,7 @@ MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
 ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-ils-am"}
 ADDED_MASS = {"iqn-ils-am", "explicit-am"}
+LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-in period
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -156,7 +157,16 @@ class Coupling:
         if self.start_orbit is None:
             self._follow(ramped, times, dt)
             return
-        samples = self._follow(ramped, times, dt, record_from=times[0] - dt + half)
+        # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
+        # only some motion along it, so the first period is capped at the amplitude the mesh
+        # motion is checked for (issue 4: +-40 mm at the tail)
+        peak = float(np.max(np.hypot(old(0.0), _velocity(old, 0.0, dt) / omega)))
+        cap = min(1.0, LEAD_IN_MAX_AMPLITUDE_M / peak) if peak > 0 else 1.0
+
+        def probe(t: float) -> NDArray:
+            return cap * ramped(t)
+
+        samples = self._follow(probe, times, dt, record_from=times[0] - dt + half)
         self.start_fit = fit_modal_force(
             samples, self.start_orbit.shape_z, self.start_orbit.added_mass_z
         )
@@ -165,7 +175,7 @@ class Coupling:
 
         def blended(t: float) -> NDArray:
             r = _smoothstep((t - times[0] + dt) / (n * dt))
-            return (1 - r) * old(t) + r * new(t)
+            return (1 - r) * cap * old(t) + r * new(t)
 
         self._follow(blended, times, dt)
 
@@ -174,12 +184,10 @@ class Coupling:
     ) -> LeadInSamples | None:
         """The fluid alone through a prescribed interface motion u(t) (solid nodes); the
         velocity and acceleration it is also given are central differences of u."""
-        h = 1e-4 * dt
         rows = []
         for t in times:
             u = motion(t)
-            v = (motion(t + h) - motion(t - h)) / (2 * h)
-            a = (motion(t + h) - 2 * u + motion(t - h)) / h**2
+            v, a = _velocity(motion, t, dt), _acceleration(motion, t, dt)
             self.fluid.read_data(
                 {
                     DISPLACEMENT: self.mapping.consistent(u),
@@ -325,3 +333,13 @@ def _orbit(motion: dict[str, NDArray], omega: float):
     """u(t) = u0 cos wt + v0/w sin wt through the structure's interface state at t = 0."""
     u0, v0 = motion[DISPLACEMENT], motion[VELOCITY]
     return lambda t: u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t)
+
+
+def _velocity(motion, t: float, dt: float) -> NDArray:
+    h = 1e-4 * dt
+    return (motion(t + h) - motion(t - h)) / (2 * h)
+
+
+def _acceleration(motion, t: float, dt: float) -> NDArray:
+    h = 1e-4 * dt
+    return (motion(t + h) - 2 * motion(t) + motion(t - h)) / h**2

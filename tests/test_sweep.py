@@ -64,6 +64,35 @@ def test_fsi_sweep_writes_the_table_and_fsi_post_draws_it(tmp_path, capsys):
     assert (out / "sweep.png").stat().st_size > 10_000
 
 
+def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, monkeypatch):
+    """A run that fails (here: the 2nd of three) becomes a row with NaN and its error; the
+    other runs' rows are written and the sweep exits with EXIT_FAILED."""
+    from fsi_orchestrator.cli import run as run_cli
+    from fsi_orchestrator.cli.common import EXIT_FAILED
+
+    real = run_cli.run_dynamic
+
+    def failing_at_8hz(case, output, **kwargs):
+        if case.actuation.frequency_hz == 8.0:
+            raise RuntimeError("pimpleFoam diverged in somewhere/openfoam\nlast lines ...")
+        return real(case, output, **kwargs)
+
+    monkeypatch.setattr(run_cli, "run_dynamic", failing_at_8hz)
+    out = tmp_path / "sweep"
+    args = [str(CASE), "--frequencies", "2,8,20", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
+    assert sweep_cli.main([*args, "--json", "--output", str(out)]) == EXIT_FAILED
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["status"] for r in rows] == [
+        "ok",
+        "failed: pimpleFoam diverged in somewhere/openfoam",
+        "ok",
+    ]
+    assert np.isnan(rows[1]["tip_amplitude_m"])
+    assert rows[0]["tip_amplitude_m"] > 0 and rows[2]["tip_amplitude_m"] > 0
+    assert len(list(csv.DictReader(open(out / "sweep.csv")))) == 3
+
+
 @pytest.mark.parametrize("text, expected", [("1:5:2", [1.0, 3.0, 5.0]), ("3,10", [3.0, 10.0])])
 def test_frequency_lists(text, expected):
     assert sweep_cli.parse_frequencies(text) == pytest.approx(expected)

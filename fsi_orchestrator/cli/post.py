@@ -18,11 +18,18 @@ from pathlib import Path
 
 import h5py
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from .common import EXIT_BAD_INPUT, EXIT_OK  # noqa: E402
+
+
+def _thrust(row: dict) -> float:
+    """The run's own thrust (OpenFOAM's) where it has one, else the slender-body estimate."""
+    value = float(row.get("mean_thrust_n") or "nan")
+    return value if np.isfinite(value) else float(row["slender_body_mean_thrust_n"])
 
 
 def plot_sweep(csv_path: Path, output: Path) -> Path:
@@ -32,9 +39,7 @@ def plot_sweep(csv_path: Path, output: Path) -> Path:
         sel = [r for r in rows if r["waveform"] == waveform]
         f = [float(r["frequency_hz"]) for r in sel]
         ax_amp.plot(f, [1e3 * float(r["tip_amplitude_m"]) for r in sel], "o-", label=waveform)
-        ax_thrust.plot(
-            f, [1e3 * float(r["slender_body_mean_thrust_n"]) for r in sel], "o-", label=waveform
-        )
+        ax_thrust.plot(f, [1e3 * _thrust(r) for r in sel], "o-", label=waveform)
     ax_amp.set_ylabel("tail-tip amplitude [mm]")
     ax_thrust.set_ylabel("mean thrust [mN]")
     ax_thrust.set_xlabel("driving frequency [Hz]")

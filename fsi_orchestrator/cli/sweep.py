@@ -12,6 +12,7 @@ import argparse
 import csv
 import dataclasses
 import json
+import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -20,7 +21,7 @@ import numpy as np
 
 from ..case import Case, CaseError
 from ..case.schema import Waveform
-from .common import EXIT_OK, base_parser, emit, load, run_main, to_jsonable
+from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
 from .compose import shell_with_fast_fluid
 
 SAMPLES_PER_PERIOD = 64
@@ -100,6 +101,8 @@ def transient_sweep(
 ) -> list[dict]:
     """One nonlinear run per (waveform, frequency). Under ``mpiexec`` (mpi4py) the runs are
     dealt round-robin to the ranks and gathered on rank 0; other ranks return []."""
+    from solid_adapter.solvers import SolverError
+
     from .run import run_dynamic
 
     jobs = [(w, f) for w in waveforms for f in frequencies]
@@ -108,25 +111,30 @@ def transient_sweep(
     mine = []
     for index in range(rank, len(jobs), size):
         waveform, f = jobs[index]
-        summary = run_dynamic(
-            with_drive(case, f, waveform),
-            output / f"{waveform.value}_{f:g}Hz",
-            resume=False,
-            show_progress=False,
-        )
+        folder = output / f"{waveform.value}_{f:g}Hz"
+        try:  # one failed frequency (a CFD crash near resonance) must not lose the others
+            summary = run_dynamic(
+                with_drive(case, f, waveform), folder, resume=False, show_progress=False
+            )
+            status = "ok"
+        except (SolverError, RuntimeError) as err:
+            summary, status = {}, f"failed: {err}".splitlines()[0]
+            print(f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr)
+        nan = float("nan")
         mine.append(
             (
                 index,
                 {
                     "waveform": waveform.value,
                     "frequency_hz": float(f),
-                    "tip_amplitude_m": summary["tip_amplitude_m"],
-                    "slender_body_mean_thrust_n": summary.get(
-                        "slender_body_mean_thrust_n", float("nan")
-                    ),
+                    "tip_amplitude_m": summary.get("tip_amplitude_m", nan),
+                    "mean_thrust_n": summary.get("mean_thrust_n", nan),
+                    "thrust_source": summary.get("thrust_source", ""),
+                    "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
                     "mean_fluid_solves_per_window": summary.get(
-                        "mean_fluid_solves_per_window", 1.0
+                        "mean_fluid_solves_per_window", 1.0 if summary else nan
                     ),
+                    "status": status,
                 },
             )
         )
@@ -169,9 +177,10 @@ def write_tables(rows: list[dict], output: Path) -> None:
 def print_table(rows: list[dict]) -> None:
     print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {'thrust [mN]':>12}")
     for r in rows:
+        thrust = r.get("mean_thrust_n", r["slender_body_mean_thrust_n"])
         print(
             f"{r['waveform']:>8} {r['frequency_hz']:7.2f} {1e3 * r['tip_amplitude_m']:19.2f} "
-            f"{1e3 * r['slender_body_mean_thrust_n']:12.2f}"
+            f"{1e3 * thrust:12.2f}  {r.get('status', '')}"
         )
 
 
@@ -196,7 +205,8 @@ def _body(args: argparse.Namespace) -> int:
     else:
         print_table(rows)
         print(f"wrote {output / 'sweep.csv'} ({time.perf_counter() - start:.1f} s)")
-    return EXIT_OK
+    failed = any(r.get("status", "ok") != "ok" for r in rows)
+    return EXIT_FAILED if failed else EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:
