@@ -25,6 +25,7 @@ non-restartable fluid solver stable.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +43,13 @@ from .convergence import (
 from .mapping import InterfaceMapping
 from .participant import ACCELERATION, DISPLACEMENT, FORCE, VELOCITY, Participant
 from .predictors import Predictor
-from .start_orbit import LeadInSamples, ModalFit, StartOrbit, fit_modal_force
+from .start_orbit import (
+    MIN_SHAPE_ALIGNMENT,
+    LeadInSamples,
+    ModalFit,
+    StartOrbit,
+    fit_modal_force,
+)
 
 FIELD = "force"
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
@@ -167,10 +174,11 @@ class Coupling:
             return cap * ramped(t)
 
         samples = self._follow(probe, times, dt, record_from=times[0] - dt + half)
-        self.start_fit = fit_modal_force(
-            samples, self.start_orbit.shape_z, self.start_orbit.added_mass_z
+        fit = fit_modal_force(samples, self.start_orbit.shape_z, self.start_orbit.added_mass_z)
+        alignment = self.start_orbit.restart(fit, MIN_SHAPE_ALIGNMENT)
+        self.start_fit = dataclasses.replace(
+            fit, alignment=alignment, applied=alignment >= MIN_SHAPE_ALIGNMENT
         )
-        self.start_orbit.restart(self.start_fit)
         new = _orbit(solid.write_data(), omega)
 
         def blended(t: float) -> NDArray:

@@ -28,6 +28,10 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+# The fit holds along the shape it was made on: a corrected orbit whose shape turns further
+# from it than this |cos| (5 Hz, near the second wet mode) is not used.
+MIN_SHAPE_ALIGNMENT = 0.9
+
 
 @dataclass(frozen=True)
 class LeadInSamples:
@@ -49,10 +53,14 @@ class ModalFit:
     damping_z: NDArray = field(repr=False)  # (n_nodes,) d, N per m/s of s, at amplitude_m
     amplitude_m: float  # amplitude of s over the samples
     residual: float  # rms misfit / rms of the fitted force (all nodes)
+    alignment: float = float("nan")  # |cos| between corrected and fitted orbit shapes
+    applied: bool = False  # the structure restarted on the corrected orbit
 
     def summary(self, shape_z: NDArray) -> dict[str, float]:
         """Modal values along e: the extra inertia e . p and damping e . d."""
         return {
+            "applied": self.applied,
+            "shape_alignment": self.alignment,
             "added_mass_kg": float(shape_z @ self.mass_z),
             "damping_ns_m": float(shape_z @ self.damping_z),
             "amplitude_m": self.amplitude_m,
@@ -90,6 +98,7 @@ class StartOrbit(Protocol):
         """(n_nodes, n_nodes) the fast model's added mass the orbit was computed with."""
         ...
 
-    def restart(self, fit: ModalFit) -> None:
-        """Put the structure at t = 0 on the orbit with the fitted extra force."""
+    def restart(self, fit: ModalFit, min_alignment: float) -> float:
+        """Put the structure at t = 0 on the orbit with the fitted extra force, unless that
+        orbit's shape strays from the fitted one (|cos| < min_alignment); returns |cos|."""
         ...

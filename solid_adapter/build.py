@@ -145,12 +145,7 @@ class CorrectableStart:
         self.case, self.model, self.solid = case, model, solid
         self._added_mass_z = added_mass_z
         with self._start_inertia():
-            orbit = self._orbit(None)
-        fundamental = orbit.harmonics[0][1].reshape(-1, NDOF)[:, 2]
-        tip = fundamental[solid.tip_node]
-        # the in-phase part of the tail's motion: the shape the lead-in swings along
-        shape = np.real(fundamental * np.conj(tip) / abs(tip))
-        self._shape_z = shape / np.linalg.norm(shape)
+            self._shape_z = self._in_phase_shape(self._orbit(None))
 
     @property
     def shape_z(self) -> NDArray:
@@ -160,7 +155,11 @@ class CorrectableStart:
     def added_mass_z(self) -> NDArray:
         return self._added_mass_z
 
-    def restart(self, fit) -> None:
+    def restart(self, fit, min_alignment: float) -> float:
+        """Restart on the corrected orbit if its shape stays close to the one the fit was
+        made along (|cos| >= min_alignment: the fit says nothing about motion off it);
+        returns that |cos|."""
+
         def on_z(values: NDArray) -> NDArray:
             full = np.zeros(self.model.ndof)
             full[2::NDOF] = values
@@ -170,7 +169,18 @@ class CorrectableStart:
             on_z(self._shape_z), on_z(fit.mass_z), on_z(fit.damping_z), fit.amplitude_m
         )
         with self._start_inertia():
-            self.solid.restart(*self._orbit(correction).at(self.solid.time))
+            orbit = self._orbit(correction)
+            alignment = abs(float(self._in_phase_shape(orbit) @ self._shape_z))
+            if alignment >= min_alignment:
+                self.solid.restart(*orbit.at(self.solid.time))
+        return alignment
+
+    def _in_phase_shape(self, orbit: PeriodicResponse) -> NDArray:
+        """The in-phase part of the fundamental's z motion, relative to the tail (unit)."""
+        fundamental = orbit.harmonics[0][1].reshape(-1, NDOF)[:, 2]
+        tip = fundamental[self.solid.tip_node]
+        shape = np.real(fundamental * np.conj(tip) / abs(tip))
+        return shape / np.linalg.norm(shape)
 
     def _orbit(self, correction: ModalCorrection | None):
         return periodic_orbit(

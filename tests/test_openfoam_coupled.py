@@ -71,6 +71,7 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     # inertia and a damping (docs/coupling.md: 1.2-1.6 times the added mass)
     fit = summary["start_correction"]
     assert fit["added_mass_kg"] > 0 and fit["damping_ns_m"] > 0
+    assert fit["applied"] and fit["shape_alignment"] > 0.9
     # the tail moves (corrected orbit: about 8 mm amplitude, near its crest at t = 0)
     assert np.ptp(tip) > 2e-4
     # the liquid resists the motion: lateral force against the tail's acceleration, and

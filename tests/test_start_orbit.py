@@ -83,4 +83,6 @@ def test_start_correction_puts_the_shell_on_the_liquids_orbit():
         v_true = true.at(0.0)[1][tip_v]
     assert abs(v_before / v_true - 1) > 0.5
     assert abs(v_after / v_true - 1) < 0.05
-    assert coupling.start_fit is not None and coupling.start_fit.residual < 1e-3
+    fit = coupling.start_fit
+    assert fit is not None and fit.residual < 1e-3
+    assert fit.applied and fit.alignment > 0.99  # the orbit keeps its shape
