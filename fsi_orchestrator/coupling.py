@@ -154,7 +154,8 @@ class Coupling:
         n, omega = self.settings.lead_in_windows, self.settings.lead_in_omega
         if n <= 0 or omega <= 0:
             return
-        old = _orbit(solid.write_data(), omega)
+        state = solid.write_data()
+        old = _orbit(state, omega)
         times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
 
@@ -167,7 +168,7 @@ class Coupling:
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
         # motion is checked for (issue 4: +-40 mm at the tail)
-        peak = float(np.max(np.hypot(old(0.0), _velocity(old, 0.0, dt) / omega)))
+        peak = float(np.max(np.hypot(state[DISPLACEMENT], state[VELOCITY] / omega)))
         cap = min(1.0, LEAD_IN_MAX_AMPLITUDE_M / peak) if peak > 0 else 1.0
 
         def probe(t: float) -> NDArray:

@@ -133,10 +133,10 @@ def _damping_scale(correction: ModalCorrection, free: NDArray, solved: list) -> 
         return 1.0
     _, w, y_f, y_p, y_d = solved[0]
     e = correction.shape[free]
-    s0, sp_, sd = e @ y_f, e @ y_p, e @ y_d
+    s0, s_p, s_d = e @ y_f, e @ y_p, e @ y_d
 
     def amplitude(sigma: float) -> float:
-        return abs(s0 / (1 + -(w**2) * sp_ + 1j * w * sigma * sd))
+        return abs(s0 / (1 - w**2 * s_p + 1j * w * sigma * s_d))
 
     per_amplitude = 1.0 / correction.reference_amplitude_m
     lo, hi = 0.0, per_amplitude * amplitude(0.0)
