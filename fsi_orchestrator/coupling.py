@@ -66,6 +66,7 @@ class CouplingSettings:
     tolerance_rel: float = 1e-4
     max_iterations: int = 50
     predictor: str = "linear"
+    period_s: float = 0.0  # the driving period, for the periodic predictor
     reuse_windows: int = 8
     # A fluid with memory (CFD) starts at rest while the structure may start on its periodic
     # orbit: before window 0 the fluid alone follows that orbit, ramped up from rest, for this
@@ -127,7 +128,7 @@ class Coupling:
         self.accelerator = _make_accelerator(settings)
         if self.accelerator is not None:
             self.accelerator.initialize({FIELD: np.zeros((self.n_solid, 3))})
-        self.predictor = Predictor(settings.predictor)
+        self.predictor = Predictor(settings.predictor, period=settings.period_s)
         self.measure = ScaledRelativeMeasure(tolerance=settings.tolerance_rel)
         self.criteria = ConvergenceCriteria(
             {FIELD: [self.measure]},
@@ -228,6 +229,8 @@ class Coupling:
             x, x_tilde = self._guarded_iteration(solid, x, x_good, dt, window)
             x_good = x
             status = self.criteria.check({FIELD: x}, {FIELD: x_tilde})
+            if self.criteria.iteration == 1:
+                predictor_miss = self.measure.value
             if status.done:
                 break
             x = self.accelerator.perform({FIELD: x}, {FIELD: x_tilde})[FIELD]
@@ -244,6 +247,8 @@ class Coupling:
             "coupling/fluid_solves": float(self.criteria.iteration + self.retries),
             "coupling/converged": float(status is WindowStatus.CONVERGED),
             "coupling/residual": float(self.criteria.residuals.get(FIELD, 0.0)),
+            # first residual over the tolerance's reference: how far the predictor missed
+            "coupling/predictor_miss": float(predictor_miss),
         }
 
     def _guarded_iteration(

@@ -10,25 +10,42 @@ For equal windows this is ``x_n`` (constant), ``2 x_n - x_{n-1}`` (linear) and
 With a shorter history the order drops to what the history allows.
 (preCICE's old second-order rule ``2.5 x_n - 2 x_{n-1} + 0.5 x_{n-2}`` is not exact for
 quadratics; this module uses the Lagrange form.)
+
+``periodic`` is for a periodically driven structure (period ``T``): once a period is recorded
+the value one period back, x(t - T), is corrected by the change from period to period,
+d(t) = x(t) - x(t - T), either as last seen (``d_n``) or extrapolated linearly
+(``2 d_n - d_{n-1}``). Exact on a periodic orbit whatever its harmonics, where a polynomial in
+time misses by ~(w dt)^(order+1): at 40 windows per period quadratic extrapolation misses the
+coupled fish's force by ~0.4 %, the period rules by ~0.03 % once the run is periodic
+(docs/coupling.md). While the run is still settling onto its orbit the period rules can be
+worse than a polynomial, so each window uses whichever of linear, quadratic and the two period
+rules predicted the last window best.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from enum import StrEnum
 
 import numpy as np
 from numpy.typing import NDArray
+
+Values = dict[str, NDArray[np.float64]]
 
 
 class Extrapolation(StrEnum):
     CONSTANT = "constant"
     LINEAR = "linear"
     QUADRATIC = "quadratic"
+    PERIODIC = "periodic"
 
     @property
     def order(self) -> int:
-        return list(Extrapolation).index(self)
+        """Polynomial order (periodic: quadratic until a period is recorded)."""
+        return min(list(Extrapolation).index(self), 2)
+
+
+PERIODIC_RULES = ("linear", "quadratic", "period", "period-linear")
 
 
 def lagrange_weights(times: Sequence[float], t: float) -> NDArray[np.float64]:
@@ -44,46 +61,122 @@ def lagrange_weights(times: Sequence[float], t: float) -> NDArray[np.float64]:
 class Predictor:
     """Keeps the last converged window-end values and extrapolates the next window's start."""
 
-    def __init__(self, extrapolation: Extrapolation | str) -> None:
+    def __init__(self, extrapolation: Extrapolation | str, period: float = 0.0) -> None:
         choices = [e.value for e in Extrapolation]
         if extrapolation not in choices:
             raise ValueError(f"extrapolation must be one of {choices}, got {extrapolation!r}")
         self.extrapolation = Extrapolation(extrapolation)
+        if self.extrapolation is Extrapolation.PERIODIC and not period > 0:
+            raise ValueError(
+                "the periodic predictor needs the driving period (actuation.frequency_hz > 0); "
+                'use coupling.predictor = "quadratic" otherwise'
+            )
+        self.period = float(period)
         self._times: list[float] = []
-        self._values: list[dict[str, NDArray]] = []
+        self._values: list[Values] = []
+        # periodic: how far each rule missed the last recorded window (inf: not yet available)
+        self.rule_errors = np.full(len(PERIODIC_RULES), np.inf)
 
     @property
     def has_history(self) -> bool:
         return bool(self._times)
 
+    @property
+    def rule(self) -> str:
+        """The rule the next prediction uses."""
+        if self.extrapolation is not Extrapolation.PERIODIC:
+            return self.extrapolation.value
+        if not np.isfinite(self.rule_errors).any():
+            return "quadratic"
+        return PERIODIC_RULES[int(np.argmin(self.rule_errors))]
+
     def record(self, time: float, values: Mapping[str, NDArray]) -> None:
         """Store the converged values at the end ``time`` of a window (copies)."""
         if self._times and not time > self._times[-1]:
             raise ValueError(f"window end times must increase: got {time} after {self._times[-1]}")
+        new = {k: np.array(v, dtype=float) for k, v in values.items()}
+        if self.extrapolation is Extrapolation.PERIODIC and self._times:
+            self.rule_errors = np.array([_miss(rule(time), new) for rule in self._rules()])
         self._times.append(float(time))
-        self._values.append({k: np.array(v, dtype=float) for k, v in values.items()})
+        self._values.append(new)
         keep = self.extrapolation.order + 1
+        if self.extrapolation is Extrapolation.PERIODIC and len(self._times) > 1:
+            # a period and three windows back
+            span = self.period + 3.5 * (self._times[-1] - self._times[-2])
+            keep = max(keep, sum(t >= self._times[-1] - span for t in self._times))
         self._times, self._values = self._times[-keep:], self._values[-keep:]
 
-    def predict(self, time: float) -> dict[str, NDArray[np.float64]]:
+    def predict(self, time: float) -> Values:
         """First iterate for the window ending at ``time``."""
         if not self._times:
             raise RuntimeError("record() the initial values before asking for a prediction")
-        weights = lagrange_weights(self._times, time)
-        names = self._values[-1].keys()
-        return {n: sum(w * v[n] for w, v in zip(weights, self._values, strict=True)) for n in names}
+        if self.extrapolation is not Extrapolation.PERIODIC:
+            return self._polynomial(time, self.extrapolation.order)
+        rules = self._rules()
+        prediction = rules[PERIODIC_RULES.index(self.rule)](time)
+        return prediction if prediction is not None else self._polynomial(time, 2)
 
+    # ------------------------------------------------------------------ rules
+    def _polynomial(self, time: float, order: int) -> Values:
+        times, values = self._times[-(order + 1) :], self._values[-(order + 1) :]
+        weights = lagrange_weights(times, time)
+        names = values[-1].keys()
+        return {n: sum(w * v[n] for w, v in zip(weights, values, strict=True)) for n in names}
+
+    def _rules(self) -> list[Callable[[float], Values | None]]:
+        return [
+            lambda t: self._polynomial(t, 1),
+            lambda t: self._polynomial(t, 2),
+            lambda t: self._periodic(t, linear=False),
+            lambda t: self._periodic(t, linear=True),
+        ]
+
+    def _at(self, time: float) -> Values | None:
+        """The recorded values at ``time`` (to a thousandth of a window), if any."""
+        if len(self._times) < 2:
+            return None
+        tolerance = 1e-3 * (self._times[-1] - self._times[-2])
+        j = int(np.argmin(np.abs(np.array(self._times) - time)))
+        return self._values[j] if abs(self._times[j] - time) <= tolerance else None
+
+    def _periodic(self, time: float, linear: bool) -> Values | None:
+        """x(t - T) + d, d the period-to-period change at the last window (or its linear
+        extrapolation from the last two); None until the history reaches back that far."""
+        ends = self._times[-2:] if linear else self._times[-1:]
+        back = [self._at(t - self.period) for t in (time, *ends)]
+        if len(ends) < (2 if linear else 1) or any(b is None for b in back):
+            return None
+        recent = self._values[-len(ends) :]
+        changes = [{n: v[n] - b[n] for n in v} for v, b in zip(recent, back[1:], strict=True)]
+        weights = lagrange_weights(ends, time)
+        return {
+            n: back[0][n] + sum(w * d[n] for w, d in zip(weights, changes, strict=True))
+            for n in back[0]
+        }
+
+    # ------------------------------------------------------------------ restart
     def save_state(self) -> dict[str, NDArray]:
-        state: dict[str, NDArray] = {"predictor_times": np.array(self._times)}
+        state: dict[str, NDArray] = {
+            "predictor_times": np.array(self._times),
+            "predictor_rule_errors": self.rule_errors.copy(),
+        }
         for j, values in enumerate(self._values):
             state.update({f"predictor_{j}_{n}": v.copy() for n, v in values.items()})
         return state
 
     def load_state(self, state: Mapping[str, NDArray]) -> None:
         self._times = [float(t) for t in np.asarray(state["predictor_times"]).ravel()]
+        if "predictor_rule_errors" in state:
+            self.rule_errors = np.array(state["predictor_rule_errors"], dtype=float)
         self._values = []
         for j in range(len(self._times)):
             prefix = f"predictor_{j}_"
             self._values.append(
                 {k[len(prefix) :]: np.array(v) for k, v in state.items() if k.startswith(prefix)}
             )
+
+
+def _miss(prediction: Values | None, actual: Values) -> float:
+    if prediction is None:
+        return np.inf
+    return float(np.sqrt(sum(np.sum((prediction[n] - actual[n]) ** 2) for n in actual)))

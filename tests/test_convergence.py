@@ -169,3 +169,57 @@ def test_predictor_state_round_trip_and_checks():
         p.record(0.1, {"f": np.zeros(2)})
     with pytest.raises(ValueError, match="extrapolation must be one of"):
         Predictor("cubic")
+
+
+# Periodic predictor: on a periodic history with harmonics a polynomial in time misses by
+# ~(w dt)^3 (quadratic), one period back is exact; on a growing orbit the period-to-period
+# change extrapolated linearly is exact for an amplitude linear in time.
+def _orbit_history(p: Predictor, x, windows: int, dt: float) -> None:
+    for k in range(windows):
+        p.record(k * dt, {"f": x(k * dt)})
+
+
+def test_periodic_predictor_is_exact_on_a_periodic_orbit_after_one_period():
+    period, n = 1 / 3, 40
+    dt, w = period / n, 2 * np.pi * 3
+
+    def x(t):
+        return np.array([np.sin(w * t) + 0.3 * np.sin(3 * w * t), 0.1 + np.cos(w * t)])
+
+    p = Predictor("periodic", period=period)
+    _orbit_history(p, x, 10, dt)
+    assert p.rule in ("linear", "quadratic")  # less than a period recorded: the better one
+    q = Predictor(p.rule)
+    _orbit_history(q, x, 10, dt)
+    np.testing.assert_array_equal(p.predict(10 * dt)["f"], q.predict(10 * dt)["f"])
+    p, q = Predictor("periodic", period=period), Predictor("quadratic")
+    _orbit_history(p, x, n + 5, dt)
+    _orbit_history(q, x, n + 5, dt)
+    t = (n + 5) * dt
+    scale = np.linalg.norm(x(t))
+    assert np.linalg.norm(q.predict(t)["f"] - x(t)) / scale > 1e-3
+    assert p.rule in ("period", "period-linear")
+    np.testing.assert_allclose(p.predict(t)["f"], x(t), atol=1e-12)
+
+
+def test_periodic_predictor_follows_a_growing_orbit_with_the_linear_period_change():
+    period, n = 1.0, 20
+    dt, w, growth = period / n, 2 * np.pi, 0.05
+
+    def x(t):
+        return np.array([(1 + growth * t) * np.sin(w * t)])
+
+    p = Predictor("periodic", period=period)
+    _orbit_history(p, x, 3 * n + 5, dt)
+    t = (3 * n + 5) * dt
+    assert p.rule == "period-linear"
+    # d(t) = x(t) - x(t - T) = growth T sin(w t): linear in t only to O((w dt)^2)
+    miss = abs(p.predict(t)["f"][0] - x(t)[0])
+    assert miss < growth * period * (w * dt) ** 2
+    state = p.save_state()
+    q = Predictor("periodic", period=period)
+    q.load_state(state)
+    assert q.rule == p.rule
+    np.testing.assert_array_equal(q.predict(t)["f"], p.predict(t)["f"])
+    with pytest.raises(ValueError, match="needs the driving period"):
+        Predictor("periodic")

@@ -104,6 +104,7 @@ class Extrapolation(StrEnum):
     CONSTANT = "constant"
     LINEAR = "linear"
     QUADRATIC = "quadratic"
+    PERIODIC = "periodic"
 
 
 class AddedMassModel(StrEnum):
@@ -451,7 +452,10 @@ class Coupling:
         ge=1,
     )
     predictor: Extrapolation = param(
-        Extrapolation.LINEAR, "First iterate of a window from the last windows' forces."
+        Extrapolation.PERIODIC,
+        "First iterate of a window from the last windows' forces. periodic: the value one "
+        "period back plus the change from period to period, or linear or quadratic "
+        "extrapolation in time, whichever predicted the last window best.",
     )
     reuse_windows: int = param(8, "iqn-ils: past windows whose secant information is reused.", ge=0)
     partitioned: bool = param(

@@ -63,6 +63,7 @@ def coupling_settings(case: Case):
         tolerance_rel=c.tolerance_rel,
         max_iterations=c.max_iterations,
         predictor=c.predictor.value,
+        period_s=1 / case.actuation.frequency_hz,
         reuse_windows=c.reuse_windows,
         added_mass_scale=c.added_mass_scale,
     )

@@ -95,7 +95,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
             coupling.fluid.finalize()
     summary = dynamic_summary(case, path)
     if coupling is not None:
-        summary.update(coupling_summary(path, coupling))
+        summary.update(coupling_summary(case, path, coupling))
         summary.update(fluid_force_summary(case, path))
     if added is not None or coupling is not None:
         summary.update(thrust_estimate(case, solid, path))
@@ -108,7 +108,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
     return summary
 
 
-def coupling_summary(results_path: Path, coupling) -> dict:
+def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
     with h5py.File(results_path, "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         converged = h5["coupling/converged"][:, 0]
@@ -119,6 +119,10 @@ def coupling_summary(results_path: Path, coupling) -> dict:
         **start,
         "coupling_scheme": coupling.settings.scheme,
         "mean_fluid_solves_per_window": float(solves.mean()),
+        # the periodic state's cost, after the start-up windows
+        "last_period_fluid_solves_per_window": float(
+            solves[-min(len(solves), windows_per_period(case)) :].mean()
+        ),
         "max_fluid_solves_per_window": int(solves.max()),
         "unconverged_windows": int((converged == 0).sum()) if coupling.settings.implicit else 0,
     }
