@@ -8,7 +8,7 @@ velocity at the window end. Checkpoints are copies of the integrator state.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -71,6 +71,14 @@ class ShellParticipant:
         self.state = self.integrator.initial_state(
             self.state.t, self.external_load, self.volts, x0, v0, a0
         )
+        self._checkpoint, self._answer = None, None
+
+    def initialize_data(self, data: Mapping[str, NDArray]) -> None:
+        """The coupled load at the initial time (before the first window): it becomes the
+        state's external force there, which the first step's balance weights with alpha_f."""
+        self.read_data(data)
+        s = self.state
+        self.state = replace(s, f_ext=self.external_load(s.t, s.x, False)[0])
         self._checkpoint, self._answer = None, None
 
     # --------------------------------------------------------------- loads
