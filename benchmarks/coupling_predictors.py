@@ -25,8 +25,12 @@ import h5py
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from fsi_orchestrator.case.loader import load_case  # noqa: E402
+from fsi_orchestrator.case.timing import windows_per_period  # noqa: E402
+
 CASE = ROOT / "cases" / "fixed_head_3Hz"
-STEPS_PER_PERIOD = 40  # the case's time.steps_per_period
 
 
 def run(predictor: str, level: str, periods: int, out: Path) -> dict:
@@ -52,7 +56,8 @@ def run(predictor: str, level: str, periods: int, out: Path) -> dict:
     with h5py.File(out / "results.h5", "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         miss = h5["coupling/predictor_miss"][:, 0]
-    per = [slice(k, k + STEPS_PER_PERIOD) for k in range(0, len(solves), STEPS_PER_PERIOD)]
+    n = windows_per_period(load_case(CASE))
+    per = [slice(k, k + n) for k in range(0, len(solves), n)]
     summary["solves_per_period"] = [float(solves[s].mean()) for s in per]
     summary["miss_per_period"] = [float(np.median(miss[s])) for s in per]
     return summary

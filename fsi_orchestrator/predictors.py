@@ -16,7 +16,7 @@ the value one period back, x(t - T), is corrected by the change from period to p
 d(t) = x(t) - x(t - T), either as last seen (``d_n``) or extrapolated linearly
 (``2 d_n - d_{n-1}``). Exact on a periodic orbit whatever its harmonics, where a polynomial in
 time misses by ~(w dt)^(order+1): at 40 windows per period quadratic extrapolation misses the
-coupled fish's force by ~0.4 %, the period rules by ~0.03 % once the run is periodic
+coupled fish's nodal force by 1-4 %, the period rules by 0.15-0.5 % once the run is periodic
 (docs/coupling.md). While the run is still settling onto its orbit the period rules can be
 worse than a polynomial, so each window uses whichever of linear, quadratic and the two period
 rules predicted the last window best.
