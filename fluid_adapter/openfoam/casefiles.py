@@ -213,14 +213,18 @@ def transport_properties(s: FlowSettings) -> dict:
     return {"transportModel": "Newtonian", "nu": s.nu_m2_s}
 
 
+# both compute k algebraically from the resolved velocity: nut is their only field
+LES_MODELS = (Turbulence.SMAGORINSKY, Turbulence.WALE)
+
+
 def turbulence_properties(s: FlowSettings) -> dict:
     if s.turbulence is Turbulence.LAMINAR:
         return {"simulationType": "laminar"}
-    if s.turbulence is Turbulence.SMAGORINSKY:
+    if s.turbulence in LES_MODELS:
         return {
             "simulationType": "LES",
             "LES": {
-                "LESModel": "Smagorinsky",
+                "LESModel": s.turbulence.value,
                 "turbulence": True,
                 "printCoeffs": True,
                 "delta": "cubeRootVol",
@@ -289,7 +293,7 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
     if s.turbulence is Turbulence.LAMINAR:
         for name in ("nut", "k", "omega"):
             fields.pop(name)
-    if s.turbulence is Turbulence.SMAGORINSKY:
+    if s.turbulence in LES_MODELS:
         fields.pop("omega")
         fields["nut"] = _field(
             "volScalarField",

@@ -87,6 +87,7 @@ class FluidDomain(StrEnum):
 class Turbulence(StrEnum):
     K_OMEGA_SST = "kOmegaSST"
     SMAGORINSKY = "Smagorinsky"
+    WALE = "WALE"  # LES whose eddy viscosity vanishes in pure shear and at walls
     LAMINAR = "laminar"
 
 
@@ -411,7 +412,11 @@ class Fluid:
     added_mass_coefficient: float = param(
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0
     )
-    turbulence: Turbulence = param(Turbulence.K_OMEGA_SST, "openfoam: turbulence model.")
+    turbulence: Turbulence = param(
+        Turbulence.K_OMEGA_SST,
+        "openfoam: turbulence model: kOmegaSST (RANS), Smagorinsky or WALE (LES), laminar. "
+        "WALE leaves resolved laminar shear alone, Smagorinsky damps it (docs/openfoam.md).",
+    )
     time_scheme: TimeScheme = param(TimeScheme.BACKWARD, "openfoam: ddt scheme.")
     driver: FluidDriver = param(FluidDriver.RELAUNCH, "openfoam: how solves are driven.")
     processes: int = param(
