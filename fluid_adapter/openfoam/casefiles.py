@@ -213,7 +213,7 @@ def transport_properties(s: FlowSettings) -> dict:
     return {"transportModel": "Newtonian", "nu": s.nu_m2_s}
 
 
-# both compute k algebraically from the resolved velocity: nut is their only field
+# both compute k algebraically from the resolved velocity (the k file they get is not read)
 LES_MODELS = (Turbulence.SMAGORINSKY, Turbulence.WALE)
 
 
