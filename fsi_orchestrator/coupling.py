@@ -41,8 +41,15 @@ from .convergence import (
     WindowStatus,
 )
 from .mapping import InterfaceMapping
-from .participant import ACCELERATION, DISPLACEMENT, FORCE, VELOCITY, Participant
-from .predictors import Predictor
+from .participant import (
+    ACCELERATION,
+    DISPLACEMENT,
+    FORCE,
+    PAST_DISPLACEMENT,
+    VELOCITY,
+    Participant,
+)
+from .predictors import EXPLICIT_RULES, PERIODIC_RULES, Predictor
 from .start_orbit import (
     MIN_SHAPE_ALIGNMENT,
     LeadInSamples,
@@ -56,6 +63,7 @@ MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
 ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-ils-am"}
 ADDED_MASS = {"iqn-ils-am", "explicit-am"}
+PAST_WINDOWS = 4  # lead-in displacements handed on (a BDF2-of-BDF2 stencil needs 3)
 LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-in period
 
 
@@ -128,7 +136,11 @@ class Coupling:
         self.accelerator = _make_accelerator(settings)
         if self.accelerator is not None:
             self.accelerator.initialize({FIELD: np.zeros((self.n_solid, 3))})
-        self.predictor = Predictor(settings.predictor, period=settings.period_s)
+        self.predictor = Predictor(
+            settings.predictor,
+            period=settings.period_s,
+            rules=PERIODIC_RULES if settings.implicit else EXPLICIT_RULES,
+        )
         self.measure = ScaledRelativeMeasure(tolerance=settings.tolerance_rel)
         self.criteria = ConvergenceCriteria(
             {FIELD: [self.measure]},
@@ -165,7 +177,7 @@ class Coupling:
 
         if self.start_orbit is None:
             self._follow(ramped, times, dt)
-            self._initialize_data(solid)
+            self._initialize_data(solid, ramped, dt)
             return
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
@@ -189,22 +201,24 @@ class Coupling:
             return (1 - r) * cap * old(t) + r * new(t)
 
         self._follow(blended, times, dt)
-        self._initialize_data(solid)
+        self._initialize_data(solid, blended, dt)
 
-    def _initialize_data(self, solid: Participant) -> None:
+    def _initialize_data(self, solid: Participant, motion, dt: float) -> None:
         """The lead-in's last fluid solve ends at t = 0 with the structure's motion there: its
         force is the exchanged variable at t = 0 (preCICE's initial data). The structure takes
         it as its load at t = 0, which window 0's generalized-alpha balance weights with
         alpha_f; left at zero, a plain scheme (x = f ~ -M_a a) started with an impulse of
         alpha_f M_a a(0) that an *-am scheme (x = g = f + M~ a, small) hardly felt, and the two
         converged to different runs (0.17 mm, 19 % of the force apart). The predictor takes
-        it as its first value."""
+        it as its first value. With it go the displacements the fluid was moved through,
+        which a fluid-consistent added-mass acceleration differentiates."""
         x0 = self.mapping.conservative(self.fluid.write_data()[FORCE])
         if self.added_mass_z is not None:
             x0[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
         initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
         if initialize is not None:
-            initialize({FORCE: x0})
+            past = np.array([motion(-k * dt) for k in range(1, PAST_WINDOWS + 1)])
+            initialize({FORCE: x0, PAST_DISPLACEMENT: past})
         self.predictor.record(solid.time, {FIELD: x0})
 
     def _follow(

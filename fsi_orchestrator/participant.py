@@ -6,6 +6,10 @@ libraries. What crosses the boundary: numpy arrays on an :class:`InterfaceMesh`.
 
 A window goes ``read_data -> solve(dt) -> write_data``. Implicit coupling stores a checkpoint at
 the start of the window and restores it before solving the window again with new data.
+
+Optional members, looked up with getattr: ``initialize_data(data)`` (the exchanged values at the
+initial time) and, on a fluid, ``acceleration_stencil`` (how it differentiates the window-end
+displacements it is given: a = sum_j c_j u_(n+1-j) / dt^2), which the added-mass schemes use.
 """
 
 from __future__ import annotations
@@ -23,6 +27,9 @@ VELOCITY = "velocity"  # (n, 3) m/s
 ACCELERATION = "acceleration"  # (n, 3) m/s^2
 FORCE = "force"  # (n, 3) N, nodal forces (conservative: they sum to the total force)
 PRESSURE = "pressure"  # (n,) Pa, net follower pressure (+z face minus -z face sign convention)
+# (k, n, 3) m: the interface displacements a fluid was moved through at the k window ends
+# before the first window, most recent first (initial data after a fluid-only lead-in)
+PAST_DISPLACEMENT = "past_displacement"
 
 State = Mapping[str, NDArray | float | int]
 

@@ -20,6 +20,12 @@ coupled fish's nodal force by 1-4 %, the period rules by 0.15-0.5 % once the run
 (docs/coupling.md). While the run is still settling onto its orbit the period rules can be
 worse than a polynomial, so each window uses whichever of linear, quadratic and the two period
 rules predicted the last window best.
+
+An explicit scheme (one solve per window) feeds the prediction straight back into the next
+window, and extrapolation amplifies what the solvers disagree on: with the CFD, linear
+extrapolation of the exchanged force grows a window-to-window oscillation that holding the last
+value does not (docs/coupling.md). Explicit schemes therefore choose between ``constant`` and
+``period`` only (``EXPLICIT_RULES``).
 """
 
 from __future__ import annotations
@@ -46,6 +52,8 @@ class Extrapolation(StrEnum):
 
 
 PERIODIC_RULES = ("linear", "quadratic", "period", "period-linear")
+EXPLICIT_RULES = ("constant", "period")
+_RULE_ORDER = {"constant": 0, "linear": 1, "quadratic": 2}
 
 
 def lagrange_weights(times: Sequence[float], t: float) -> NDArray[np.float64]:
@@ -61,7 +69,14 @@ def lagrange_weights(times: Sequence[float], t: float) -> NDArray[np.float64]:
 class Predictor:
     """Keeps the last converged window-end values and extrapolates the next window's start."""
 
-    def __init__(self, extrapolation: Extrapolation | str, period: float = 0.0) -> None:
+    def __init__(
+        self,
+        extrapolation: Extrapolation | str,
+        period: float = 0.0,
+        rules: tuple[str, ...] = PERIODIC_RULES,
+    ) -> None:
+        """``rules``: what ``periodic`` chooses from (PERIODIC_RULES or EXPLICIT_RULES); until
+        a period is recorded it uses the highest polynomial order among them."""
         choices = [e.value for e in Extrapolation]
         if extrapolation not in choices:
             raise ValueError(f"extrapolation must be one of {choices}, got {extrapolation!r}")
@@ -72,10 +87,12 @@ class Predictor:
                 'use coupling.predictor = "quadratic" otherwise'
             )
         self.period = float(period)
+        self.rules = tuple(rules)
+        self._fallback = max((_RULE_ORDER[r] for r in self.rules if r in _RULE_ORDER), default=2)
         self._times: list[float] = []
         self._values: list[Values] = []
         # periodic: how far each rule missed the last recorded window (inf: not yet available)
-        self.rule_errors = np.full(len(PERIODIC_RULES), np.inf)
+        self.rule_errors = np.full(len(self.rules), np.inf)
 
     @property
     def has_history(self) -> bool:
@@ -87,8 +104,8 @@ class Predictor:
         if self.extrapolation is not Extrapolation.PERIODIC:
             return self.extrapolation.value
         if not np.isfinite(self.rule_errors).any():
-            return "quadratic"
-        return PERIODIC_RULES[int(np.argmin(self.rule_errors))]
+            return next(r for r, k in _RULE_ORDER.items() if k == self._fallback)
+        return self.rules[int(np.argmin(self.rule_errors))]
 
     def record(self, time: float, values: Mapping[str, NDArray]) -> None:
         """Store the converged values at the end ``time`` of a window (copies)."""
@@ -112,9 +129,9 @@ class Predictor:
             raise RuntimeError("record() the initial values before asking for a prediction")
         if self.extrapolation is not Extrapolation.PERIODIC:
             return self._polynomial(time, self.extrapolation.order)
-        rules = self._rules()
-        prediction = rules[PERIODIC_RULES.index(self.rule)](time)
-        return prediction if prediction is not None else self._polynomial(time, 2)
+        rule = self.rule
+        prediction = self._rules()[self.rules.index(rule)](time) if rule in self.rules else None
+        return prediction if prediction is not None else self._polynomial(time, self._fallback)
 
     # ------------------------------------------------------------------ rules
     def _polynomial(self, time: float, order: int) -> Values:
@@ -124,12 +141,14 @@ class Predictor:
         return {n: sum(w * v[n] for w, v in zip(weights, values, strict=True)) for n in names}
 
     def _rules(self) -> list[Callable[[float], Values | None]]:
-        return [
-            lambda t: self._polynomial(t, 1),
-            lambda t: self._polynomial(t, 2),
-            lambda t: self._periodic(t, linear=False),
-            lambda t: self._periodic(t, linear=True),
-        ]
+        every = {
+            "constant": lambda t: self._polynomial(t, 0),
+            "linear": lambda t: self._polynomial(t, 1),
+            "quadratic": lambda t: self._polynomial(t, 2),
+            "period": lambda t: self._periodic(t, linear=False),
+            "period-linear": lambda t: self._periodic(t, linear=True),
+        }
+        return [every[r] for r in self.rules]
 
     def _at(self, time: float) -> Values | None:
         """The recorded values at ``time`` (to a thousandth of a window), if any."""

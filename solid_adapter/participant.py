@@ -18,6 +18,7 @@ from fsi_orchestrator.participant import (
     ACCELERATION,
     DISPLACEMENT,
     FORCE,
+    PAST_DISPLACEMENT,
     PRESSURE,
     VELOCITY,
     InterfaceMesh,
@@ -75,10 +76,19 @@ class ShellParticipant:
 
     def initialize_data(self, data: Mapping[str, NDArray]) -> None:
         """The coupled load at the initial time (before the first window): it becomes the
-        state's external force there, which the first step's balance weights with alpha_f."""
+        state's external force there, which the first step's balance weights with alpha_f.
+        With it, the interface displacements the fluid was moved through before (a lead-in):
+        the history a fluid-consistent added-mass stencil differentiates."""
         self.read_data(data)
         s = self.state
         self.state = replace(s, f_ext=self.external_load(s.t, s.x, False)[0])
+        if PAST_DISPLACEMENT in data:
+            past = []
+            for u in np.asarray(data[PAST_DISPLACEMENT], dtype=float):
+                x = s.x.copy().reshape(self.model.n_nodes, NDOF)
+                x[:, :3] = u
+                past.append(x.ravel())
+            self.state = replace(self.state, past=tuple(past))
         self._checkpoint, self._answer = None, None
 
     # --------------------------------------------------------------- loads
@@ -123,7 +133,8 @@ class ShellParticipant:
         return {
             DISPLACEMENT: self.state.x.reshape(n, NDOF)[:, :3].copy(),
             VELOCITY: self.state.v.reshape(n, NDOF)[:, :3].copy(),
-            ACCELERATION: self.state.a.reshape(n, NDOF)[:, :3].copy(),
+            # as the fluid differentiates the displacement, where the added mass says so
+            ACCELERATION: self.state.added_mass_acceleration.reshape(n, NDOF)[:, :3].copy(),
         }
 
     def monitor(self) -> dict[str, NDArray | float]:
@@ -159,15 +170,23 @@ class ShellParticipant:
             "f_int": s.f_int.copy(),
             "f_ext": s.f_ext.copy(),
             "f_damp": s.f_damp.copy(),
+            "past": np.array(s.past).reshape(len(s.past), self.model.ndof),
+            "a_fluid": s.added_mass_acceleration.copy(),
+            "has_a_fluid": int(s.a_fluid is not None),
             "force": self._force.copy(),
             "pressure": self._pressure.copy(),
             "newton_iterations": self.integrator.newton_iterations,
         }
 
     def load_state(self, state: State) -> None:
+        past = np.array(state.get("past", np.zeros((0, self.model.ndof))), dtype=float)
         self.state = DynamicState(
             float(state["t"]),
             *(np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext", "f_damp")),
+            past=tuple(past),
+            a_fluid=np.array(state["a_fluid"], dtype=float)
+            if int(state.get("has_a_fluid", 0))
+            else None,
         )
         self._force = np.array(state["force"], dtype=float)
         self._pressure = np.array(state["pressure"], dtype=float)

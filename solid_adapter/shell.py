@@ -134,6 +134,10 @@ class ShellModel:
         # True in partitioned *-am coupling: the added mass stands for part of the exchanged
         # force and is time-weighted like it (solvers.GeneralizedAlphaIntegrator)
         self.added_mass_as_force = False
+        # ... and, set with it, how the fluid differentiates the displacements it is given:
+        # a_fluid = sum_j c_j x_(n+1-j) / dt^2 (Participant.acceleration_stencil); None: the
+        # integrator's own acceleration
+        self.added_mass_stencil: tuple[float, ...] | None = None
         self.inertia = self.mass  # structural mass plus any fluid added mass
 
     def set_added_mass(self, matrix_z: NDArray | None) -> None:

@@ -237,6 +237,11 @@ class DynamicState:
     f_int: NDArray  # internal force at (x, volts(t))
     f_ext: NDArray  # external force at (t, x)
     f_damp: NDArray  # damping force at (x, v)
+    # With a fluid-consistent added-mass stencil (ShellModel.added_mass_stencil): the
+    # displacements at the previous step ends, most recent first, and the acceleration the
+    # stencil gave at t (None: the state's own a stands for it)
+    past: tuple[NDArray, ...] = ()
+    a_fluid: NDArray | None = None
 
     def copy(self) -> DynamicState:
         return replace(
@@ -247,7 +252,14 @@ class DynamicState:
             f_int=self.f_int.copy(),
             f_ext=self.f_ext.copy(),
             f_damp=self.f_damp.copy(),
+            past=tuple(p.copy() for p in self.past),
+            a_fluid=None if self.a_fluid is None else self.a_fluid.copy(),
         )
+
+    @property
+    def added_mass_acceleration(self) -> NDArray:
+        """The acceleration the added mass is weighted with (see added_mass_stencil)."""
+        return self.a if self.a_fluid is None else self.a_fluid
 
 
 @dataclass(frozen=True)
@@ -381,15 +393,26 @@ class TimeIntegrator:
         """Advance by dt; if Newton fails, retry the same interval with halved sub-steps.
         ``guess``: a start for Newton at s.t + dt (a coupling iteration's previous answer)."""
         try:
-            return self._step(s, dt, loads, volts, guess)
+            return self._step(s, dt, loads, volts, guess, stencil=depth == 0)
         except SolverError:
             if depth >= self.max_halvings:
                 raise
             half = self.step(s, dt / 2, loads, volts, depth + 1)  # no guess: it was for dt
-            return self.step(half, dt / 2, loads, volts, depth + 1)
+            end = self.step(half, dt / 2, loads, volts, depth + 1)
+            if depth > 0:
+                return end
+            # sub-steps weigh the added mass with their own a (the stencil is for dt); the
+            # window-level history goes on
+            return replace(end, past=(s.x, *s.past)[: len(s.past)], a_fluid=None)
 
     def _step(
-        self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn, guess: NDArray | None
+        self,
+        s: DynamicState,
+        dt: float,
+        loads: LoadFn,
+        volts: VoltFn,
+        guess: NDArray | None,
+        stencil: bool = True,
     ) -> DynamicState:
         raise NotImplementedError
 
@@ -409,7 +432,13 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         self.p = params
 
     def _step(
-        self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn, guess: NDArray | None
+        self,
+        s: DynamicState,
+        dt: float,
+        loads: LoadFn,
+        volts: VoltFn,
+        guess: NDArray | None,
+        stencil: bool = True,
     ) -> DynamicState:
         p, m = self.p, self.model
         t1 = s.t + dt
@@ -423,6 +452,16 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         # plate masses a spurious term that made converged coupled runs oscillate and grow.
         # Weighting M~ at alpha_f too makes the converged windows exactly M_s a + K u = f.
         as_force = m.added_mass is not None and getattr(m, "added_mass_as_force", False)
+        # ... and weighting it with the acceleration the fluid computes from the same
+        # displacements (a_fluid = c0 x1 + known) keeps g = f + M~ a_fluid free of the
+        # difference between the two discrete accelerations, which explicit-am fed back
+        # window to window (a period-3 instability, docs/coupling.md)
+        coeffs = getattr(m, "added_mass_stencil", None) if as_force and stencil else None
+        if coeffs is not None:
+            past = _padded_past(s, len(coeffs) - 2, dt)
+            c0 = coeffs[0] / dt**2
+            known = sum(c * xk for c, xk in zip(coeffs[1:], (s.x, *past), strict=True)) / dt**2
+            a_fluid0 = s.added_mass_acceleration
 
         def kinematics(x1: NDArray) -> tuple[NDArray, NDArray]:
             a1 = (x1 - s.x - dt * s.v) / (p.beta * dt * dt) - (1 - 2 * p.beta) / (2 * p.beta) * s.a
@@ -434,7 +473,14 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             f_int, K = internal(x1, V1, tangent)
             f_ext, Kf = loads(t1, x1, tangent)
             r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
-            if as_force:  # the added mass weighted like the exchanged force (alpha_f)
+            if coeffs is not None:  # M~ ((1 - af) a_fluid1 + af a_fluid0) in place of its M~ a
+                r += m.added_mass @ (
+                    (1 - p.alpha_f) * (c0 * x1 + known)
+                    + p.alpha_f * a_fluid0
+                    - (1 - p.alpha_m) * a1
+                    - p.alpha_m * s.a
+                )
+            elif as_force:  # the added mass weighted like the exchanged force (alpha_f)
                 r += m.added_mass @ ((p.alpha_m - p.alpha_f) * (a1 - s.a))
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
             C = None
@@ -444,7 +490,9 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             if not tangent:
                 return r, None
             T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
-            if as_force:
+            if coeffs is not None:
+                T = T + ((1 - p.alpha_f) * c0 - c_a) * m.added_mass
+            elif as_force:
                 T = T + (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * m.added_mass
             if C is not None:
                 T = T + c_v * C
@@ -463,7 +511,19 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         v1, a1 = kinematics(x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        return DynamicState(t1, x1, v1, a1, f_int, f_ext, self._damping_force(x1, v1))
+        state = DynamicState(t1, x1, v1, a1, f_int, f_ext, self._damping_force(x1, v1))
+        if coeffs is None:
+            return replace(state, past=s.past)
+        return replace(state, past=(s.x, *past)[: len(past)], a_fluid=c0 * x1 + known)
+
+
+def _padded_past(s: DynamicState, n: int, dt: float) -> tuple[NDArray, ...]:
+    """The n previous displacements; those not recorded (a start without the fluid's
+    history) continue the state's velocity backwards (at rest: the state itself)."""
+    past = list(s.past[:n])
+    while len(past) < n:
+        past.append(s.x - (len(past) + 1) * dt * s.v)
+    return tuple(past)
 
 
 class EnergyConservingIntegrator(TimeIntegrator):
@@ -480,7 +540,13 @@ class EnergyConservingIntegrator(TimeIntegrator):
     """
 
     def _step(
-        self, s: DynamicState, dt: float, loads: LoadFn, volts: VoltFn, guess: NDArray | None
+        self,
+        s: DynamicState,
+        dt: float,
+        loads: LoadFn,
+        volts: VoltFn,
+        guess: NDArray | None,
+        stencil: bool = True,
     ) -> DynamicState:
         m = self.model  # starts from s.x whatever the guess (the midpoint tangent needs no help)
         t1 = s.t + dt

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 from numpy.typing import NDArray
 
+from fsi_orchestrator.case.schema import TimeScheme
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, State
 
 from .checkmesh import MeshQuality
@@ -46,6 +47,17 @@ class OpenFoamParticipant:
         self._displacement = np.zeros((n, 3))
         self._loads: SurfaceLoads | None = None
         self._checkpoint: tuple[NDArray, SurfaceLoads | None] | None = None
+
+    @property
+    def acceleration_stencil(self) -> tuple[float, ...]:
+        """How pimpleFoam differentiates the window-end displacements u_k it is given, as
+        a = sum_j c_j u_(n+1-j) / dt^2 (one fluid step per window): the plate's normal
+        velocity is the mesh flux (``backward``: fvc::meshPhi = 3/2 phi_n - 1/2 phi_n-1, i.e.
+        BDF2 of u) and the momentum ddt differentiates it once more (BDF2 of that; Euler:
+        first differences twice). The added-mass schemes weigh M~ with it (docs/coupling.md)."""
+        if self.run.settings.time_scheme is TimeScheme.EULER:
+            return (1.0, -2.0, 1.0)
+        return (2.25, -6.0, 5.5, -2.0, 0.25)  # (3/2, -2, 1/2) convolved with itself
 
     # --------------------------------------------------------------- protocol
     @property

@@ -122,6 +122,8 @@ def coupled_setup(case: Case, fluid_factory=None):
     else:
         true_added_mass = fast_added_mass(case, build_shell_model(case))
         fluid = PotentialParticipant(true_added_mass, solid.interface())
+    if settings.uses_added_mass:  # M~ weighted with the fluid's own discrete acceleration
+        model.added_mass_stencil = getattr(fluid, "acceleration_stencil", None)
     start = None
     if case.coupling.start_correction and settings.lead_in_windows > 0:
         start = CorrectableStart(case, model, solid, estimate.matrix)
