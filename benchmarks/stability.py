@@ -7,7 +7,7 @@ density). The *-am schemes are preconditioned with a coarser potential-flow adde
 the one that plays the fluid (as the potential model differs from OpenFOAM's discrete added
 mass).
 
-    .venv/bin/python benchmarks/stability.py [--quick] [--json]
+    .venv/bin/python benchmarks/stability.py [--quick] [--json] [--cfd-like 1.0]
 """
 
 from __future__ import annotations
@@ -155,14 +155,22 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument(
+        "--cfd-like",
+        type=float,
+        metavar="FACTOR",
+        help="the fluid differentiates displacements like OpenFOAM (BDF2 of BDF2) with FACTOR "
+        "times the added mass (cfd_like_fluid)",
+    )
     args = parser.parse_args()
+    factory = cfd_like_fluid(args.cfd_like) if args.cfd_like else None
     ratios = (1e-2, 1.0, 1e2) if args.quick else (1e-2, 1e-1, 1.0, 1e1, 1e2)
     steps_list = (20,) if args.quick else (20, 80)
     table = []
     for ratio in ratios:
         for steps in steps_list:
             for scheme in SCHEMES:
-                result = run(ratio, steps, scheme)
+                result = run(ratio, steps, scheme, fluid_factory=factory)
                 table.append(
                     {"density_ratio": ratio, "steps_per_period": steps, "scheme": scheme, **result}
                 )

@@ -212,13 +212,25 @@ class Coupling:
         converged to different runs (0.17 mm, 19 % of the force apart). The predictor takes
         it as its first value. With it go the displacements the fluid was moved through,
         which a fluid-consistent added-mass acceleration differentiates."""
+        initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
+        stencil = getattr(self.fluid, "acceleration_stencil", None)
+        if initialize is not None:
+            past = np.array([motion(-k * dt) for k in range(1, PAST_WINDOWS + 1)])
+            history = {PAST_DISPLACEMENT: past}
+            if stencil is not None and self.added_mass_z is not None:
+                # the acceleration the fluid saw at t = 0, which the exchanged g holds from
+                # window 0 on (with the structure's a here, window 0 started with a jolt of
+                # M~ (a - a_fluid) that rang down over ~6 windows)
+                levels = [motion(0.0), *past]
+                history[ACCELERATION] = (
+                    sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
+                )
+            initialize(history)
         x0 = self.mapping.conservative(self.fluid.write_data()[FORCE])
         if self.added_mass_z is not None:
             x0[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
-        initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
         if initialize is not None:
-            past = np.array([motion(-k * dt) for k in range(1, PAST_WINDOWS + 1)])
-            initialize({FORCE: x0, PAST_DISPLACEMENT: past})
+            initialize({FORCE: x0})
         self.predictor.record(solid.time, {FIELD: x0})
 
     def _follow(

@@ -75,21 +75,29 @@ class ShellParticipant:
         self._checkpoint, self._answer = None, None
 
     def initialize_data(self, data: Mapping[str, NDArray]) -> None:
-        """The coupled load at the initial time (before the first window): it becomes the
-        state's external force there, which the first step's balance weights with alpha_f.
-        With it, the interface displacements the fluid was moved through before (a lead-in):
-        the history a fluid-consistent added-mass stencil differentiates."""
-        self.read_data(data)
+        """Values at the initial time, before the first window. ``force``: the coupled load,
+        which becomes the state's external force (the first step's balance weights it with
+        alpha_f). ``past_displacement``: the interface displacements the fluid was moved
+        through before (a lead-in), the history a fluid-consistent added-mass stencil
+        differentiates; ``acceleration``: the acceleration the fluid saw at t = 0."""
         s = self.state
-        self.state = replace(s, f_ext=self.external_load(s.t, s.x, False)[0])
+        if FORCE in data or PRESSURE in data:
+            self.read_data(data)
+            s = replace(s, f_ext=self.external_load(s.t, s.x, False)[0])
         if PAST_DISPLACEMENT in data:
-            past = []
-            for u in np.asarray(data[PAST_DISPLACEMENT], dtype=float):
-                x = s.x.copy().reshape(self.model.n_nodes, NDOF)
-                x[:, :3] = u
-                past.append(x.ravel())
-            self.state = replace(self.state, past=tuple(past))
+            s = replace(s, past=tuple(self._with_translations(u) for u in data[PAST_DISPLACEMENT]))
+        if ACCELERATION in data:
+            a = s.a.copy().reshape(self.model.n_nodes, NDOF)
+            a[:, :3] = np.asarray(data[ACCELERATION], dtype=float)
+            s = replace(s, a_fluid=a.ravel())
+        self.state = s
         self._checkpoint, self._answer = None, None
+
+    def _with_translations(self, u: NDArray) -> NDArray:
+        """The state's DOF vector with the nodes' translations replaced by u (n, 3)."""
+        x = self.state.x.copy().reshape(self.model.n_nodes, NDOF)
+        x[:, :3] = np.asarray(u, dtype=float)
+        return x.ravel()
 
     # --------------------------------------------------------------- loads
     def external_load(

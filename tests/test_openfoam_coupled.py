@@ -98,6 +98,40 @@ def test_persistent_driver_runs_one_solve_per_window(world_searchable):
     assert np.isfinite(summary["mean_thrust_n"])
 
 
+def test_one_solve_per_window_is_stable_and_follows_the_implicit_run(world_searchable):
+    """explicit-am with the persistent pimpleFoam: the added mass weighted with OpenFOAM's own
+    discrete acceleration (BDF2 of BDF2) keeps one solve per window stable. Before, the lateral
+    force alternated with a period of 3 windows and grew (docs/coupling.md). Over the first
+    period the tail's amplitude is that of iqn-ils-am at 1e-4 (measured 0.04 % apart here)."""
+    case = ROOT / "cases" / "fixed_head_3Hz"
+    common = ["--set", "time.periods=1", "--set", "time.steps_per_period=40"]
+    runs = {}
+    for name, scheme in (("explicit", "explicit-am"), ("implicit", "iqn-ils-am")):
+        extra = [*common, "--set", f"coupling.scheme={scheme}"]
+        if scheme == "explicit-am":
+            extra += ["--set", "fluid.driver=persistent"]
+        done = subprocess.run(
+            fsi_run(case, world_searchable / name, *extra), capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr[-3000:]
+        with h5py.File(world_searchable / name / "results.h5") as h5:
+            runs[name] = (h5["shell/tip_displacement_m"][:, 2], h5["fluid/force_n"][:, 2])
+    (tip, force), (tip_ref, force_ref) = runs["explicit"], runs["implicit"]
+    assert len(tip) == 40
+    # the lagged load rings for a few windows after the start (the force alternates by up to
+    # 0.5 N in windows 0-5, decaying by ~0.6 per window), then the force is smooth: no
+    # window-to-window oscillation left in the second half of the period
+    ring = np.abs(np.diff(force, 2))
+    assert ring[20:].max() < 0.05 * np.abs(force).max()
+    assert ring[20:].max() < 0.2 * ring[:6].max()
+    assert abs(np.ptp(tip) / np.ptp(tip_ref) - 1) < 0.03
+    # the first period holds the last load (no period recorded yet): the tail leads the
+    # implicit run by about one window (measured: 0.9 mm, force 0.09 N of 0.85 N)
+    after_ring = np.abs(force - force_ref)[8:].max()
+    assert after_ring < 0.15 * np.abs(force_ref).max(), after_ring
+    assert np.abs(tip - tip_ref).max() < 0.15 * np.abs(tip_ref).max()
+
+
 def test_killed_coupled_run_resumes_to_the_same_result(world_searchable):
     """kill -9 after a checkpoint, --resume: the fluid restarts from its checkpoint time
     folder, the structure and the quasi-Newton Jacobian from checkpoint.h5."""
