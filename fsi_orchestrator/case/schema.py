@@ -460,7 +460,8 @@ class Coupling:
         Extrapolation.PERIODIC,
         "First iterate of a window from the last windows' forces. periodic: the value one "
         "period back plus the change from period to period, or linear or quadratic "
-        "extrapolation in time, whichever predicted the last window best.",
+        "extrapolation in time, whichever predicted the last window best (explicit schemes: "
+        "the period rule or the last value; extrapolation destabilises them).",
     )
     reuse_windows: int = param(8, "iqn-ils: past windows whose secant information is reused.", ge=0)
     partitioned: bool = param(
