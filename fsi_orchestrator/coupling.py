@@ -218,9 +218,9 @@ class Coupling:
             past = np.array([motion(-k * dt) for k in range(1, PAST_WINDOWS + 1)])
             history = {PAST_DISPLACEMENT: past}
             if stencil is not None and self.added_mass_z is not None:
-                # the acceleration the fluid saw at t = 0, which the exchanged g holds from
-                # window 0 on (with the structure's a here, window 0 started with a jolt of
-                # M~ (a - a_fluid) that rang down over ~6 windows)
+                # the acceleration the fluid saw at t = 0: the initial g then holds the same
+                # acceleration as every later window's (the start-up ring of explicit-am,
+                # docs/coupling.md, is the lagged load catching up, not this)
                 levels = [motion(0.0), *past]
                 history[ACCELERATION] = (
                     sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
