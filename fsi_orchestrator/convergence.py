@@ -185,10 +185,15 @@ class ConvergenceCriteria:
         self.measures = {name: list(ms) for name, ms in measures.items()}
         self.min_iterations, self.max_iterations = min_iterations, max_iterations
         self.divergence_factor = float(divergence_factor)
+        self._max_iterations = max_iterations
         self.new_window(0)
 
-    def new_window(self, window: int) -> None:
-        """Reset for window ``window`` (its number is only used in messages)."""
+    def new_window(self, window: int, max_iterations: int | None = None) -> None:
+        """Reset for window ``window`` (its number is only used in messages); ``max_iterations``
+        overrides the bound for this window (1: an explicit window of an implicit run)."""
+        if max_iterations is not None:
+            _check_iterations(self.min_iterations, max_iterations)
+        self.max_iterations = self._max_iterations if max_iterations is None else max_iterations
         self.window, self.iteration = window, 0
         self.residuals: dict[str, float] = {}  # ||x~ - x|| per field, last iteration
         self._first: dict[str, float] = {}

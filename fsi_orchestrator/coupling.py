@@ -20,7 +20,9 @@ initial Jacobian taken from M~_a, written as a change of variables; the least-sq
 quasi-Newton update then learns the rest and keeps it from window to window in a multi-vector
 Jacobian (IQN-IMVJ, acceleration/iqn_imvj.py), since the preconditioned map changes little.
 With one solve per window (``explicit-am``) the correction alone keeps a persistent,
-non-restartable fluid solver stable.
+non-restartable fluid solver stable. ``iqn-ils-am`` may start that way for its first periods
+(``explicit_windows``): the start-up is cheap, and the iterated windows after it find a
+periodic history for their predictor.
 """
 
 from __future__ import annotations
@@ -87,10 +89,16 @@ class CouplingSettings:
     # responds with about 3 M~/dt^2 (measured), the structure's a_k with 1/(beta dt^2) =
     # 3.6/dt^2: M' = M~ is within 20 % of the optimum (docs/coupling.md).
     added_mass_scale: float = 1.0
+    # iqn-ils-am: windows before this one take one solve each, as explicit-am
+    explicit_windows: int = 0
 
     @property
     def implicit(self) -> bool:
         return self.scheme in ITERATIVE
+
+    def iterates(self, window: int) -> bool:
+        """Whether ``window`` is iterated to convergence."""
+        return self.implicit and window >= self.explicit_windows
 
     @property
     def uses_added_mass(self) -> bool:
@@ -136,11 +144,7 @@ class Coupling:
         self.accelerator = _make_accelerator(settings)
         if self.accelerator is not None:
             self.accelerator.initialize({FIELD: np.zeros((self.n_solid, 3))})
-        self.predictor = Predictor(
-            settings.predictor,
-            period=settings.period_s,
-            rules=PERIODIC_RULES if settings.implicit else EXPLICIT_RULES,
-        )
+        self.predictor = Predictor(settings.predictor, period=settings.period_s)
         self.measure = ScaledRelativeMeasure(tolerance=settings.tolerance_rel)
         self.criteria = ConvergenceCriteria(
             {FIELD: [self.measure]},
@@ -263,8 +267,10 @@ class Coupling:
         if window == 0:
             self.lead_in(solid, dt)
         t_end = solid.time + dt
+        iterate = self.settings.iterates(window)
+        self.predictor.use_rules(PERIODIC_RULES if iterate else EXPLICIT_RULES)
         x = self._first_iterate(t_end)
-        self.criteria.new_window(window)
+        self.criteria.new_window(window, max_iterations=None if iterate else 1)
         solid.store_checkpoint()
         self.fluid.store_checkpoint()
         self.retries = 0
@@ -274,15 +280,17 @@ class Coupling:
             x_good = x
             status = self.criteria.check({FIELD: x}, {FIELD: x_tilde})
             if self.criteria.iteration == 1:
-                predictor_miss = self.measure.value
+                predictor_miss, updated_miss = self.measure.value, np.nan
+            elif self.criteria.iteration == 2:  # how much the accelerator's first step gained
+                updated_miss = self.measure.value
             if status.done:
                 break
             x = self.accelerator.perform({FIELD: x}, {FIELD: x_tilde})[FIELD]
             solid.restore_checkpoint()
             self.fluid.restore_checkpoint()
-        if status is WindowStatus.MAX_ITERATIONS and self.settings.implicit:
+        if status is WindowStatus.MAX_ITERATIONS and iterate:
             self.unconverged_windows += 1
-        if self.accelerator is not None:
+        if self.accelerator is not None and iterate:
             self.accelerator.iterations_converged({FIELD: x}, {FIELD: x_tilde})
         self.predictor.record(t_end, {FIELD: x_tilde})
         self._check_growth(float(np.linalg.norm(x_tilde)), window)
@@ -290,9 +298,12 @@ class Coupling:
         return {
             "coupling/fluid_solves": float(self.criteria.iteration + self.retries),
             "coupling/converged": float(status is WindowStatus.CONVERGED),
+            "coupling/iterated": float(iterate),
             "coupling/residual": float(self.criteria.residuals.get(FIELD, 0.0)),
             # first residual over the tolerance's reference: how far the predictor missed
             "coupling/predictor_miss": float(predictor_miss),
+            # the same after the accelerator's first update (nan: one solve)
+            "coupling/updated_miss": float(updated_miss),
         }
 
     def _guarded_iteration(

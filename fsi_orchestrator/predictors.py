@@ -53,6 +53,7 @@ class Extrapolation(StrEnum):
 
 PERIODIC_RULES = ("linear", "quadratic", "period", "period-linear")
 EXPLICIT_RULES = ("constant", "period")
+ALL_RULES = ("constant", "linear", "quadratic", "period", "period-linear")
 _RULE_ORDER = {"constant": 0, "linear": 1, "quadratic": 2}
 
 
@@ -87,12 +88,25 @@ class Predictor:
                 'use coupling.predictor = "quadratic" otherwise'
             )
         self.period = float(period)
-        self.rules = tuple(rules)
-        self._fallback = max((_RULE_ORDER[r] for r in self.rules if r in _RULE_ORDER), default=2)
+        self.use_rules(rules)
         self._times: list[float] = []
         self._values: list[Values] = []
-        # periodic: how far each rule missed the last recorded window (inf: not yet available)
-        self.rule_errors = np.full(len(self.rules), np.inf)
+        # periodic: how far each of ALL_RULES missed the last recorded window (inf: not yet
+        # available); all are scored so that a run can change its rules (explicit start-up)
+        self.all_rule_errors = np.full(len(ALL_RULES), np.inf)
+
+    def use_rules(self, rules: tuple[str, ...]) -> None:
+        """What ``periodic`` chooses from from now on (the history is kept)."""
+        unknown = set(rules) - set(ALL_RULES)
+        if unknown:
+            raise ValueError(f"unknown predictor rules {sorted(unknown)}; known: {ALL_RULES}")
+        self.rules = tuple(rules)
+        self._fallback = max((_RULE_ORDER[r] for r in self.rules if r in _RULE_ORDER), default=2)
+
+    @property
+    def rule_errors(self) -> NDArray[np.float64]:
+        """How far each of ``rules`` missed the last recorded window."""
+        return self.all_rule_errors[[ALL_RULES.index(r) for r in self.rules]]
 
     @property
     def has_history(self) -> bool:
@@ -113,7 +127,9 @@ class Predictor:
             raise ValueError(f"window end times must increase: got {time} after {self._times[-1]}")
         new = {k: np.array(v, dtype=float) for k, v in values.items()}
         if self.extrapolation is Extrapolation.PERIODIC and self._times:
-            self.rule_errors = np.array([_miss(rule(time), new) for rule in self._rules()])
+            self.all_rule_errors = np.array(
+                [_miss(rule(time), new) for rule in self._rules(ALL_RULES)]
+            )
         self._times.append(float(time))
         self._values.append(new)
         keep = self.extrapolation.order + 1
@@ -130,7 +146,7 @@ class Predictor:
         if self.extrapolation is not Extrapolation.PERIODIC:
             return self._polynomial(time, self.extrapolation.order)
         rule = self.rule
-        prediction = self._rules()[self.rules.index(rule)](time) if rule in self.rules else None
+        prediction = self._rules((rule,))[0](time) if rule in self.rules else None
         return prediction if prediction is not None else self._polynomial(time, self._fallback)
 
     # ------------------------------------------------------------------ rules
@@ -140,7 +156,7 @@ class Predictor:
         names = values[-1].keys()
         return {n: sum(w * v[n] for w, v in zip(weights, values, strict=True)) for n in names}
 
-    def _rules(self) -> list[Callable[[float], Values | None]]:
+    def _rules(self, names: tuple[str, ...]) -> list[Callable[[float], Values | None]]:
         every = {
             "constant": lambda t: self._polynomial(t, 0),
             "linear": lambda t: self._polynomial(t, 1),
@@ -148,7 +164,7 @@ class Predictor:
             "period": lambda t: self._periodic(t, linear=False),
             "period-linear": lambda t: self._periodic(t, linear=True),
         }
-        return [every[r] for r in self.rules]
+        return [every[r] for r in names]
 
     def _at(self, time: float) -> Values | None:
         """The recorded values at ``time`` (to a thousandth of a window), if any."""
@@ -177,7 +193,7 @@ class Predictor:
     def save_state(self) -> dict[str, NDArray]:
         state: dict[str, NDArray] = {
             "predictor_times": np.array(self._times),
-            "predictor_rule_errors": self.rule_errors.copy(),
+            "predictor_all_rule_errors": self.all_rule_errors.copy(),
         }
         for j, values in enumerate(self._values):
             state.update({f"predictor_{j}_{n}": v.copy() for n, v in values.items()})
@@ -185,8 +201,8 @@ class Predictor:
 
     def load_state(self, state: Mapping[str, NDArray]) -> None:
         self._times = [float(t) for t in np.asarray(state["predictor_times"]).ravel()]
-        if "predictor_rule_errors" in state:
-            self.rule_errors = np.array(state["predictor_rule_errors"], dtype=float)
+        if "predictor_all_rule_errors" in state:
+            self.all_rule_errors = np.array(state["predictor_all_rule_errors"], dtype=float)
         self._values = []
         for j in range(len(self._times)):
             prefix = f"predictor_{j}_"

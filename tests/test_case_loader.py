@@ -60,6 +60,14 @@ def test_override_is_validated_like_the_file(tmp_path):
             "geometry.peduncle_height_m does not apply",
         ),
         ("[coupling]\nrelaxation = 1.7\n", "coupling.relaxation must be <= 1, got 1.7"),
+        (
+            '[coupling]\nscheme = "aitken"\nexplicit_periods = 1\n',
+            'coupling.explicit_periods applies to coupling.scheme = "iqn-ils-am" only',
+        ),
+        (
+            "[time]\nperiods = 2\n[coupling]\nexplicit_periods = 2\n",
+            "coupling.explicit_periods (2) must be less than time.periods (2)",
+        ),
         ('[fluid]\nmodel = "lbm"\n', "fluid.model must be one of"),
         ("[analysis\nkind = 1\n", "not valid TOML"),
     ],

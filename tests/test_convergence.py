@@ -16,7 +16,12 @@ from fsi_orchestrator.convergence import (
     ResidualRelativeMeasure,
     WindowStatus,
 )
-from fsi_orchestrator.predictors import Predictor, lagrange_weights
+from fsi_orchestrator.predictors import (
+    EXPLICIT_RULES,
+    PERIODIC_RULES,
+    Predictor,
+    lagrange_weights,
+)
 
 OLD, NEW = np.zeros(2), np.array([3.0, 4.0])  # ||NEW - OLD|| = 5
 
@@ -75,6 +80,13 @@ def test_min_and_max_iterations():
     never = ConvergenceCriteria({"f": [AbsoluteMeasure(tolerance=1.0)]}, max_iterations=3)
     statuses = [never.check({"f": OLD}, {"f": NEW}) for _ in range(3)]
     assert statuses == ["iterate", "iterate", "max-iterations"] and statuses[-1].done
+    # an explicit window of an implicit run: one iteration, then the run's bound again
+    never.new_window(1, max_iterations=1)
+    assert never.check({"f": OLD}, {"f": NEW}) is WindowStatus.MAX_ITERATIONS
+    never.new_window(2)
+    assert never.check({"f": OLD}, {"f": NEW}) is WindowStatus.ITERATE
+    with pytest.raises(ConvergenceSettingsError, match="max_iterations must be an integer"):
+        never.new_window(3, max_iterations=0)
 
 
 def test_all_measures_of_all_fields_must_hold():
@@ -223,3 +235,31 @@ def test_periodic_predictor_follows_a_growing_orbit_with_the_linear_period_chang
     np.testing.assert_array_equal(q.predict(t)["f"], p.predict(t)["f"])
     with pytest.raises(ValueError, match="needs the driving period"):
         Predictor("periodic")
+
+
+def test_predictor_rules_change_mid_run_and_keep_their_scores():
+    """An implicit run with an explicit start-up switches from EXPLICIT_RULES to
+    PERIODIC_RULES: every rule was scored all along, so the first iterated window already
+    chooses the period rule, exact on a periodic orbit."""
+    period, n = 1 / 3, 40
+    dt, w = period / n, 2 * np.pi * 3
+
+    def x(t):
+        return np.array([np.sin(w * t) + 0.3 * np.sin(3 * w * t)])
+
+    p = Predictor("periodic", period=period, rules=EXPLICIT_RULES)
+    _orbit_history(p, x, 5, dt)
+    assert p.rule == "constant"  # no period yet: the lowest order of the explicit rules
+    _orbit_history_from(p, x, 5, n + 5, dt)
+    assert p.rule == "period"
+    p.use_rules(PERIODIC_RULES)
+    assert p.rule in ("period", "period-linear") and np.isfinite(p.rule_errors).all()
+    t = (n + 5) * dt
+    np.testing.assert_allclose(p.predict(t)["f"], x(t), atol=1e-12)
+    with pytest.raises(ValueError, match="unknown predictor rules"):
+        p.use_rules(("cubic",))
+
+
+def _orbit_history_from(p: Predictor, x, first: int, last: int, dt: float) -> None:
+    for k in range(first, last):
+        p.record(k * dt, {"f": x(k * dt)})

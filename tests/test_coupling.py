@@ -88,6 +88,20 @@ def test_the_fluid_consistent_added_mass_changes_the_iterations_not_the_result()
     np.testing.assert_allclose(a, b, atol=1e-6 * np.abs(b).max())
 
 
+@pytest.mark.slow
+def test_an_explicit_start_up_is_explicit_am_and_then_iterates():
+    """coupling.explicit_periods = 1: the first period of iqn-ils-am takes one solve per
+    window and is explicit-am exactly (same predictor rules, same structure, no accelerator);
+    from the second period on every window is iterated to the tolerance, the predictor
+    already choosing among the implicit rules."""
+    fluid = cfd_like_fluid(1.0)
+    started = run(1e-2, 20, "iqn-ils-am", windows=28, fluid_factory=fluid, explicit_periods=1)
+    explicit = run(1e-2, 20, "explicit-am", windows=20, fluid_factory=fluid)
+    assert started["solves"][:20] == [1.0] * 20
+    assert min(started["solves"][20:]) >= 2 and started["unconverged"] == 0
+    np.testing.assert_array_equal(started["tip_z_m"][:20], explicit["tip_z_m"])
+
+
 BEAM = """
 [geometry]
 kind = "beam"

@@ -139,6 +139,19 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             f'"{c.scheme.value}" needs: use fluid.driver = "relaunch", or a one-solve-per-window '
             'scheme ("explicit-am")'
         )
+    if c.explicit_periods > 0:
+        if c.scheme.value != "iqn-ils-am":
+            raise CaseError(
+                f'coupling.explicit_periods applies to coupling.scheme = "iqn-ils-am" only (got '
+                f'"{c.scheme.value}"): one solve per window is stable only with the added-mass '
+                "correction; set it to 0 or change the scheme"
+            )
+        if t.step_s is None and c.explicit_periods >= t.periods:
+            raise CaseError(
+                f"coupling.explicit_periods ({c.explicit_periods}) must be less than "
+                f"time.periods ({t.periods:g}); for a run without iterations use "
+                'coupling.scheme = "explicit-am"'
+            )
 
 
 def replace(case: Case, **sections: Any) -> Case:

@@ -50,6 +50,7 @@ def added_mass_for_preconditioning(case: Case, shell_model):
 
 
 def coupling_settings(case: Case):
+    from ..case.timing import windows_per_period
     from ..coupling import CouplingSettings
 
     c = case.coupling
@@ -66,6 +67,7 @@ def coupling_settings(case: Case):
         period_s=1 / case.actuation.frequency_hz,
         reuse_windows=c.reuse_windows,
         added_mass_scale=c.added_mass_scale,
+        explicit_windows=c.explicit_periods * windows_per_period(case),
     )
 
 

@@ -112,6 +112,15 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
     with h5py.File(results_path, "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         converged = h5["coupling/converged"][:, 0]
+    iterated = np.array([coupling.settings.iterates(w) for w in range(len(solves))], dtype=bool)
+    explicit = {}
+    if coupling.settings.implicit and not iterated.all():  # an explicit start-up
+        explicit = {
+            "explicit_windows": int((~iterated).sum()),
+            "iterated_fluid_solves_per_window": float(solves[iterated].mean())
+            if iterated.any()
+            else None,
+        }
     start = {}
     if coupling.start_fit is not None:
         start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
@@ -124,7 +133,8 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
             solves[-min(len(solves), windows_per_period(case)) :].mean()
         ),
         "max_fluid_solves_per_window": int(solves.max()),
-        "unconverged_windows": int((converged == 0).sum()) if coupling.settings.implicit else 0,
+        "unconverged_windows": int((converged[iterated] == 0).sum()),
+        **explicit,
     }
 
 
