@@ -124,15 +124,26 @@ checkpoint_every = 3
 """
 
 
+# the same 20 windows as two periods, the first one explicit: the resume crosses the switch
+EXPLICIT_START = BEAM.replace(
+    "periods = 1\nsteps_per_period = 20", "periods = 2\nsteps_per_period = 10"
+)
+EXPLICIT_START = EXPLICIT_START.replace(
+    "partitioned = true", "partitioned = true\nexplicit_periods = 1"
+)
+
+
 @pytest.mark.slow
-def test_killed_coupled_run_resumes_to_the_same_result(tmp_path):
+@pytest.mark.parametrize("text", [BEAM, EXPLICIT_START], ids=["iterated", "explicit-start"])
+def test_killed_coupled_run_resumes_to_the_same_result(tmp_path, text):
     """kill -9 a partitioned, added-mass preconditioned IQN run mid-way, --resume: the same
     history (accelerator Jacobian and predictor restored) as an uninterrupted run, to 1e-6."""
+    assert "explicit_periods" in EXPLICIT_START and "periods = 2" in EXPLICIT_START
     cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
     ref, case = tmp_path / "ref", tmp_path / "killed"
     for folder in (ref, case):
         folder.mkdir()
-        (folder / "case.toml").write_text(BEAM)
+        (folder / "case.toml").write_text(text)
     subprocess.run([*cmd, str(ref)], check=True, capture_output=True)
     proc = subprocess.Popen([*cmd, str(case)], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     results = case / "output" / "results.h5"
@@ -151,8 +162,11 @@ def test_killed_coupled_run_resumes_to_the_same_result(tmp_path):
     done = subprocess.run([*cmd, "--resume", str(case)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     with h5py.File(ref / "output" / "results.h5") as a, h5py.File(results) as b:
-        for key in ("shell/tip_displacement_m", "coupling/fluid_solves", "coupling/predictor_miss"):
+        keys = ("shell/tip_displacement_m", "coupling/fluid_solves", "coupling/predictor_miss")
+        for key in keys:
             np.testing.assert_allclose(
                 b[key][:], a[key][:], rtol=0, atol=1e-6 * (1 + np.abs(a[key][:]).max())
             )
         assert b["time_s"].shape == a["time_s"].shape == (20, 1)
+        if text is EXPLICIT_START:
+            assert a["coupling/fluid_solves"][:10, 0].tolist() == [1.0] * 10
