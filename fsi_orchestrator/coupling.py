@@ -21,8 +21,8 @@ quasi-Newton update then learns the rest and keeps it from window to window in a
 Jacobian (IQN-IMVJ, acceleration/iqn_imvj.py), since the preconditioned map changes little.
 With one solve per window (``explicit-am``) the correction alone keeps a persistent,
 non-restartable fluid solver stable. ``iqn-ils-am`` may start that way for its first periods
-(``explicit_windows``): the start-up is cheap, and the iterated windows after it find a
-periodic history for their predictor.
+(``explicit_windows``): the start-up transient then costs what prescribed motion costs, and
+the windows after it are iterated to the tolerance (docs/coupling.md).
 """
 
 from __future__ import annotations
