@@ -183,10 +183,9 @@ class ConvergenceCriteria:
                 f"divergence_factor must be > 1, got {divergence_factor!r}"
             )
         self.measures = {name: list(ms) for name, ms in measures.items()}
-        self.min_iterations, self.max_iterations = min_iterations, max_iterations
+        self.min_iterations, self._max_iterations = min_iterations, max_iterations
         self.divergence_factor = float(divergence_factor)
-        self._max_iterations = max_iterations
-        self.new_window(0)
+        self.new_window(0)  # sets max_iterations, the bound of the current window
 
     def new_window(self, window: int, max_iterations: int | None = None) -> None:
         """Reset for window ``window`` (its number is only used in messages); ``max_iterations``
