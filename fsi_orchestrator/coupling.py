@@ -63,7 +63,7 @@ from .start_orbit import (
 FIELD = "force"
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
-ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-ils-am"}
+ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-imvj", "iqn-ils-am"}
 ADDED_MASS = {"iqn-ils-am", "explicit-am"}
 PAST_WINDOWS = 4  # lead-in displacements handed on (a BDF2-of-BDF2 stencil needs 3)
 LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-in period
@@ -106,7 +106,9 @@ class CouplingSettings:
 
 
 def _make_accelerator(settings: CouplingSettings):
-    if settings.scheme == "iqn-ils-am":  # keeps all past windows in a Jacobian (IMVJ)
+    # keeps all past windows in a Jacobian (IMVJ); "iqn-imvj" without the added-mass
+    # preconditioning is for participants without a fast fluid model (the Turek & Hron flag)
+    if settings.scheme in ("iqn-ils-am", "iqn-imvj"):
         return IQNIMVJAcceleration(IQNILSSettings(initial_relaxation=settings.relaxation))
     if settings.scheme == "constant":
         return make_acceleration("constant", relaxation=settings.relaxation)

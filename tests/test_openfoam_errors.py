@@ -58,6 +58,14 @@ def test_divergence_is_recognised_in_a_log():
     fine = "Courant Number mean: 0.01 max: 1.7\ntrapFpe: Floating point exception trapping enabled"
     assert runner.diverged(fpe) and runner.diverged(nan) and runner.diverged(big)
     assert not runner.diverged(fine)
+    # a linear solve that diverged while its initial residual was small (k-omega SST at the
+    # default level, before k and omega were convected upwind): OpenFOAM bounds and goes on
+    omega = (
+        "smoothSolver:  Solving for omega, Initial residual = 0.00860792179467, "
+        "Final residual = 8.08686645762e+21, No Iterations 1000"
+    )
+    assert runner.divergence(omega) == "the final residual of omega is 8.08686645762e+21"
+    assert runner.divergence(nan) == "the initial residual of Ux is nan"
 
 
 @pytest.mark.openfoam

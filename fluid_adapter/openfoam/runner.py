@@ -26,6 +26,7 @@ from .errors import INSTALL_HINT, DivergenceError, OpenFoamNotFoundError, OpenFo
 DEFAULT_PROJECT_DIR = Path("/usr/share/openfoam")
 NOBODY_UID = 65534  # Debian's nobody:nogroup
 TAIL_LINES = 25
+SCANNED_LINES = 120  # a running solver's window (one step: ~40 lines) checked for divergence
 # Residuals are normalised: anything far above 1 (or a NaN) means the solution has blown up.
 RESIDUAL_LIMIT = 1e3
 COURANT_LIMIT = 1e3
@@ -153,13 +154,15 @@ def launch(command: Command) -> subprocess.Popen:
 
 
 def check_finished(command: Command, returncode: int) -> None:
-    text = tail(command.log)
-    if diverged(text):
+    text = command.log.read_text(errors="replace") if command.log.is_file() else ""
+    reason = divergence(text)
+    if reason is not None:
         raise DivergenceError(
-            f"{command.app} diverged in {command.case} (NaN or residuals > {RESIDUAL_LIMIT:g}); "
-            f"reduce the time step (time.steps_per_period) or refine the mesh. Case folder kept. "
-            f"Last lines of {command.log}:\n{text}"
+            f"{command.app} diverged in {command.case}: {reason}; reduce the time step "
+            f"(time.steps_per_period) or refine the mesh. Case folder kept. "
+            f"Last lines of {command.log}:\n{tail(command.log)}"
         )
+    text = tail(command.log)
     if returncode != 0:
         raise OpenFoamRunError(
             f"{command.app} failed (exit {returncode}) in {command.case}; case folder kept. "
@@ -169,11 +172,11 @@ def check_finished(command: Command, returncode: int) -> None:
 
 def check_log(command: Command) -> None:
     """Divergence check of a running solver's latest log lines."""
-    text = tail(command.log, 60)
-    if diverged(text):
+    reason = divergence(tail(command.log, SCANNED_LINES))
+    if reason is not None:
         raise DivergenceError(
-            f"{command.app} diverged in {command.case} (NaN or residuals/Courant > "
-            f"{RESIDUAL_LIMIT:g}); reduce the time step or refine the mesh. Case folder kept. "
+            f"{command.app} diverged in {command.case}: {reason}; reduce the time step "
+            f"(time.steps_per_period) or refine the mesh. Case folder kept. "
             f"Last lines of {command.log}:\n{tail(command.log)}"
         )
 
@@ -188,17 +191,33 @@ def tail(path: Path, lines: int = TAIL_LINES) -> str:
     return "\n".join(text.splitlines()[-lines:])
 
 
-_RESIDUAL = re.compile(r"Initial residual = ([^,\s]+)")
+_SOLVE = re.compile(r"Solving for (\w+), Initial residual = ([^,\s]+), Final residual = ([^,\s]+)")
 _FPE = re.compile(r"sigFpe::sigHandler|Floating point exception \(core dumped\)")
 _COURANT = re.compile(r"Courant Number mean: \S+ max: (\S+)")
 
 
-def diverged(log_text: str) -> bool:
-    """NaN/FPE trap, or residuals / Courant numbers far beyond any converging run."""
+def divergence(log_text: str) -> str | None:
+    """What in the log shows a blown-up solution (None: nothing): the NaN/FPE trap, a residual
+    far beyond any converging run - the initial one, or the final one of a linear solve that
+    diverged, which OpenFOAM only bounds and goes on from - or a Courant number."""
     if _FPE.search(log_text):
-        return True
-    numbers = [float(v) for v in _RESIDUAL.findall(log_text) + _COURANT.findall(log_text)]
-    return any(math.isnan(v) or v > max(RESIDUAL_LIMIT, COURANT_LIMIT) for v in numbers)
+        return "floating point exception (NaN)"
+    for field, initial, final in _SOLVE.findall(log_text):
+        for which, value in (("initial", initial), ("final", final)):
+            if _bad(float(value), RESIDUAL_LIMIT):
+                return f"the {which} residual of {field} is {value}"
+    for value in _COURANT.findall(log_text):
+        if _bad(float(value), COURANT_LIMIT):
+            return f"the Courant number is {value}"
+    return None
+
+
+def _bad(value: float, limit: float) -> bool:
+    return math.isnan(value) or value > limit
+
+
+def diverged(log_text: str) -> bool:
+    return divergence(log_text) is not None
 
 
 def utility(app: str, case: Path, *args: str, log_name: str | None = None) -> Path:
