@@ -58,67 +58,45 @@ class FishParameters:
 
 
 _MM = 1e-3
+# Tables 3.4 / 4.1: L 167, H 55, peduncle 30, fin 50, CFRP 0.2, MFC 112 x 40 (active 85 x 28),
+# head weight r 2.5 mm, 2.5 mm thick (Table 3.5).
+_ORIGINAL = FishParameters(
+    body_length_m=167 * _MM,
+    max_height_m=55 * _MM,
+    peduncle_height_m=30 * _MM,
+    caudal_fin_height_m=50 * _MM,
+    head_length_m=30 * _MM,
+    taper_start_x_m=112 * _MM,
+    peduncle_x_m=140 * _MM,
+    nose_height_fraction=0.75,
+    thickness_m=0.2 * _MM,
+    mfc_thickness_m=0.3 * _MM,
+    actuator_length_m=112 * _MM,
+    actuator_width_m=40 * _MM,
+    active_length_m=85 * _MM,
+    active_width_m=28 * _MM,
+    actuator_start_x_m=3 * _MM,
+    head_weight_radius_m=2.5 * _MM,
+    head_weight_thickness_m=2.5 * _MM,
+)
+# Table 5.2: peduncle 3, fin 60, head weight r 7, max height 64, same MFC, CFRP 0.2.
+_SERIAL = replace(
+    _ORIGINAL,
+    max_height_m=64 * _MM,
+    peduncle_height_m=3 * _MM,
+    caudal_fin_height_m=60 * _MM,
+    head_weight_radius_m=7 * _MM,
+)
 FISH_PRESETS = {
-    # Tables 3.4 / 4.1: L 167, H 55, peduncle 30, fin 50, CFRP 0.2, MFC 112 x 40 (active 85 x 28),
-    # head weight r 2.5 mm, 2.5 mm thick (Table 3.5).
-    "original": FishParameters(
-        body_length_m=167 * _MM,
-        max_height_m=55 * _MM,
-        peduncle_height_m=30 * _MM,
-        caudal_fin_height_m=50 * _MM,
-        head_length_m=30 * _MM,
-        taper_start_x_m=112 * _MM,
-        peduncle_x_m=140 * _MM,
-        nose_height_fraction=0.75,
-        thickness_m=0.2 * _MM,
-        mfc_thickness_m=0.3 * _MM,
-        actuator_length_m=112 * _MM,
-        actuator_width_m=40 * _MM,
-        active_length_m=85 * _MM,
-        active_width_m=28 * _MM,
-        actuator_start_x_m=3 * _MM,
-        head_weight_radius_m=2.5 * _MM,
-        head_weight_thickness_m=2.5 * _MM,
-    ),
-    # Table 5.2: peduncle 3, fin 60, head weight r 7, max height 64, same MFC, CFRP 0.2.
-    "serial": FishParameters(
-        body_length_m=167 * _MM,
-        max_height_m=64 * _MM,
-        peduncle_height_m=3 * _MM,
-        caudal_fin_height_m=60 * _MM,
-        head_length_m=30 * _MM,
-        taper_start_x_m=112 * _MM,
-        peduncle_x_m=140 * _MM,
-        nose_height_fraction=0.75,
-        thickness_m=0.2 * _MM,
-        mfc_thickness_m=0.3 * _MM,
-        actuator_length_m=112 * _MM,
-        actuator_width_m=40 * _MM,
-        active_length_m=85 * _MM,
-        active_width_m=28 * _MM,
-        actuator_start_x_m=3 * _MM,
-        head_weight_radius_m=7 * _MM,
-        head_weight_thickness_m=2.5 * _MM,
-    ),
-    # Table 5.6: peduncle 3, fin 20, head weight r 7, max height 64, MFC 103 x 35, CFRP 0.1.
-    "integrative": FishParameters(
-        body_length_m=167 * _MM,
-        max_height_m=64 * _MM,
-        peduncle_height_m=3 * _MM,
+    "original": _ORIGINAL,
+    "serial": _SERIAL,
+    # Table 5.6: the serial fish with fin 20, MFC 103 x 35, CFRP 0.1.
+    "integrative": replace(
+        _SERIAL,
         caudal_fin_height_m=20 * _MM,
-        head_length_m=30 * _MM,
-        taper_start_x_m=112 * _MM,
-        peduncle_x_m=140 * _MM,
-        nose_height_fraction=0.75,
         thickness_m=0.1 * _MM,
-        mfc_thickness_m=0.3 * _MM,
         actuator_length_m=103 * _MM,
         actuator_width_m=35 * _MM,
-        active_length_m=85 * _MM,
-        active_width_m=28 * _MM,
-        actuator_start_x_m=3 * _MM,
-        head_weight_radius_m=7 * _MM,
-        head_weight_thickness_m=2.5 * _MM,
     ),
 }
 
