@@ -154,19 +154,18 @@ def launch(command: Command) -> subprocess.Popen:
 
 
 def check_finished(command: Command, returncode: int) -> None:
-    text = command.log.read_text(errors="replace") if command.log.is_file() else ""
-    reason = divergence(text)
+    whole = command.log.read_text(errors="replace") if command.log.is_file() else ""
+    reason = divergence(whole)
     if reason is not None:
         raise DivergenceError(
             f"{command.app} diverged in {command.case}: {reason}; reduce the time step "
             f"(time.steps_per_period) or refine the mesh. Case folder kept. "
             f"Last lines of {command.log}:\n{tail(command.log)}"
         )
-    text = tail(command.log)
     if returncode != 0:
         raise OpenFoamRunError(
             f"{command.app} failed (exit {returncode}) in {command.case}; case folder kept. "
-            f"Last lines of {command.log}:\n{text}"
+            f"Last lines of {command.log}:\n{tail(command.log)}"
         )
 
 
