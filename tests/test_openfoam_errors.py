@@ -18,7 +18,7 @@ from fluid_adapter.openfoam import (
     runner,
 )
 from fluid_adapter.openfoam.checkmesh import check_mesh
-from fluid_adapter.openfoam.foamio import read_points, update_dict
+from fluid_adapter.openfoam.foamio import read_points, update_dict, write_dict
 from fluid_adapter.openfoam.prescribed import mode_motion
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
@@ -93,6 +93,30 @@ def test_inverted_mesh_fails_check_mesh_with_a_fix(tmp_path):
         f[None] = points
     with pytest.raises(MeshQualityError, match=r"(?s)failed check.*Fix:"):
         check_mesh(p.run.path, time="1")
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 6, 9])
+def test_scalar_field_lists_of_any_length_stay_scalar_lists(tmp_path, n):
+    """foamlib 1.7 writes a list of 3, 6 or 9 numbers as a uniform vector/tensor; in a scalar
+    field (the plate diffusivity of a processor patch with 3 faces: 4 MPI ranks, default
+    level) pimpleFoam then stopped with "expected scalar value, found '('"."""
+    values = np.arange(1.0, n + 1)
+    write_dict(
+        tmp_path / "gamma",
+        {
+            "FoamFile": {"class": "surfaceScalarField"},
+            "dimensions": [0, 0, 0, 0, 0, 0, 0],
+            "internalField": values,
+            "boundaryField": {"fishPlusZ": {"type": "calculated", "value": values}},
+        },
+        field=True,
+    )
+    text = (tmp_path / "gamma").read_text()
+    assert text.count(f"nonuniform List<scalar> {n}(") == 2
+    assert "uniform (" not in text
+    with FoamFile(tmp_path / "gamma") as f:
+        np.testing.assert_array_equal(f["internalField"], values)
+        np.testing.assert_array_equal(f["boundaryField"]["fishPlusZ"]["value"], values)
 
 
 @pytest.mark.openfoam

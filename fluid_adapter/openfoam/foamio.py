@@ -2,10 +2,16 @@
 
 foamlib edits an existing file in a context manager; a new file is created empty first. The
 mesh files (points, faces, boundary) are read with foamlib too, ASCII or binary.
+
+foamlib (1.7) writes any list of 3, 6 or 9 numbers as a uniform vector or tensor, also in a
+scalar field: a processor patch with 3 faces of the plate got ``value uniform (a b c)`` and
+pimpleFoam stopped ("expected scalar value, found '('"; 4 MPI ranks, default level).
+``write_dict`` rewrites such entries of scalar field files as the lists they are.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -27,6 +33,20 @@ def write_dict(path: Path, entries: Mapping[str, Any], *, field: bool = False) -
         f.update(entries)
         if "class" in header:
             f.class_ = header["class"]
+    if field and "Scalar" in str(header.get("class", "")):
+        path.write_text(_scalar_lists(path.read_text()))
+
+
+# "uniform (" cannot start a scalar field's value: it is foamlib's reading of a 3/6/9-list
+_UNIFORM_TUPLE = re.compile(r"\buniform \(([^()]*)\)")
+
+
+def _scalar_lists(text: str) -> str:
+    def as_list(match: re.Match[str]) -> str:
+        values = match.group(1).split()
+        return f"nonuniform List<scalar> {len(values)}({' '.join(values)})"
+
+    return _UNIFORM_TUPLE.sub(as_list, text)
 
 
 def update_dict(path: Path, entries: Mapping[str, Any]) -> None:
