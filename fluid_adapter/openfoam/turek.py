@@ -206,6 +206,7 @@ def channel_fields(
             },
         },
         "p": {
+            "FoamFile": {"class": "volScalarField"},  # a nonuniform p is a scalar list
             "dimensions": [0, 2, -2, 0, 0, 0, 0],
             "internalField": p_internal,
             "boundaryField": {
