@@ -142,3 +142,33 @@ def test_two_ranks_give_the_serial_forces(driver):
         assert (root / "2" / "fluid" / "processor1").is_dir()
     finally:
         shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.mark.openfoam
+@needs_openfoam
+def test_two_ranks_restore_a_window_as_serial():
+    """Implicit coupling on MPI ranks: a window solved with a wrong iterate, restored (every
+    processor folder goes back) and solved again gives the serial run's force."""
+    root = Path(tempfile.mkdtemp(prefix="fishfsi-parallel-restore-"))
+    try:
+        forces = {}
+        for ranks in (1, 2):
+            case, p = small_participant(root / str(ranks), processes=ranks)
+            motion = mode_motion(case, p.interface().points, 0.02, 3.0, ramp_periods=0.5)
+            for k in (1, 2):
+                p.read_data({DISPLACEMENT: motion.displacement(k * DT)})
+                p.solve(DT)
+            p.store_checkpoint()
+            p.read_data({DISPLACEMENT: 1.5 * motion.displacement(3 * DT)})  # a wrong iterate
+            p.solve(DT)
+            wrong = p.monitor()["force_n"]
+            p.restore_checkpoint()
+            p.read_data({DISPLACEMENT: motion.displacement(3 * DT)})
+            p.solve(DT)
+            forces[ranks] = p.monitor()["force_n"]
+            p.finalize()
+            assert np.abs(wrong - forces[ranks]).max() > 1e-2 * np.abs(forces[ranks]).max()
+        scale = np.abs(forces[1]).max()
+        assert np.abs(forces[2] - forces[1]).max() / scale < 1e-4
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
