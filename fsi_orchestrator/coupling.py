@@ -163,9 +163,10 @@ class Coupling:
         """Fluid-only lead-in before window 0. The structure starts on its (fast-model)
         periodic orbit with displacement u0 and velocity v0 while the CFD's plate is flat and
         its liquid at rest: jumping to u0 in one window would move the plate at metres per
-        second. Instead the fluid follows u(t) = r(t) (u0 cos wt + v0/w sin wt) over one
-        period, r a smooth ramp from 0 to 1 over its first half, so at t = 0 it arrives with
-        the structure's position and velocity and a developed flow. With a ``start_orbit``
+        second. Instead the fluid follows u(t) = r(t) u_orbit(t) over one period (the orbit
+        with all the harmonics it holds, a square wave's too), r a smooth ramp from 0 to 1
+        over its first half, so at t = 0 it arrives with the structure's position and
+        velocity and a developed flow. With a ``start_orbit``
         the fluid's force over the second half corrects the structure's orbit
         (fsi_orchestrator.start_orbit), and a second period blends the motion from the old
         orbit into the new one. Prescribed motion: the structure is not advanced and its
@@ -173,8 +174,7 @@ class Coupling:
         n, omega = self.settings.lead_in_windows, self.settings.lead_in_omega
         if n <= 0 or omega <= 0:
             return
-        state = solid.write_data()
-        old = _orbit(state, omega)
+        old = _periodic_motion(solid, omega)
         times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
 
@@ -188,7 +188,7 @@ class Coupling:
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
         # motion is checked for (issue 4: +-40 mm at the tail)
-        peak = float(np.max(np.hypot(state[DISPLACEMENT], state[VELOCITY] / omega)))
+        peak = max(float(np.max(np.abs(old(t)))) for t in times)
         cap = min(1.0, LEAD_IN_MAX_AMPLITUDE_M / peak) if peak > 0 else 1.0
 
         def probe(t: float) -> NDArray:
@@ -200,7 +200,7 @@ class Coupling:
         self.start_fit = dataclasses.replace(
             fit, alignment=alignment, applied=alignment >= MIN_SHAPE_ALIGNMENT
         )
-        new = _orbit(solid.write_data(), omega)
+        new = _periodic_motion(solid, omega)
 
         def blended(t: float) -> NDArray:
             r = _smoothstep((t - times[0] + dt) / (n * dt))
@@ -400,9 +400,15 @@ def _smoothstep(s: float) -> float:
     return s * s * s * (10 - 15 * s + 6 * s * s)
 
 
-def _orbit(motion: dict[str, NDArray], omega: float):
-    """u(t) = u0 cos wt + v0/w sin wt through the structure's interface state at t = 0."""
-    u0, v0 = motion[DISPLACEMENT], motion[VELOCITY]
+def _periodic_motion(solid: Participant, omega: float):
+    """u(t): the interface motion on the periodic orbit the structure started on, with all
+    its harmonics (``orbit_displacement``, optional in the protocol); else the harmonic
+    u0 cos wt + v0/w sin wt through its state at t = 0."""
+    on_orbit = getattr(solid, "orbit_displacement", None)
+    if on_orbit is not None and on_orbit(0.0) is not None:
+        return on_orbit
+    state = solid.write_data()
+    u0, v0 = state[DISPLACEMENT], state[VELOCITY]
     return lambda t: u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t)
 
 

@@ -96,20 +96,25 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
     drive = DriveSignal.from_case(case)
     if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
-        x0, v0, a0 = periodic_start(case, model, drive, loads, integrator)
-        return ShellParticipant(model, integrator, drive.volts, loads, x0=x0, v0=v0, a0=a0)
+        orbit = periodic_orbit(case, model, drive, loads, integrator)
+        return ShellParticipant(model, integrator, drive.volts, loads, orbit=orbit)
     return ShellParticipant(model, integrator, drive.volts, loads)
 
 
-def periodic_start(
-    case: Case,
-    model: ShellModel,
-    drive: DriveSignal,
-    loads: StaticLoads,
-    integrator: TimeIntegrator,
-) -> tuple[NDArray, NDArray, NDArray]:
-    """State at t = 0 of the linear periodic response about the mean-voltage equilibrium."""
-    return periodic_orbit(case, model, drive, loads, integrator).at(0.0)
+# Fewest time steps per period of a harmonic that the periodic start holds. A square wave's
+# odd harmonics reach the wet modes the time step does not resolve: undamped, the potential
+# orbit at 3 Hz had 30 mm of its 15th harmonic (45 Hz, 2.7 steps per period) and a tail
+# velocity of 7 m/s at t = 0, which generalized-alpha damps away in a few steps and which
+# crashed the CFD lead-in (docs/coupling.md).
+MIN_STEPS_PER_HARMONIC = 8
+
+
+def resolved_harmonics(case: Case) -> int:
+    """How many of the drive's harmonics (the odd ones of a square wave) the periodic start
+    holds: those with at least MIN_STEPS_PER_HARMONIC steps per period (at least the
+    fundamental)."""
+    highest = max(1, case.time.steps_per_period // MIN_STEPS_PER_HARMONIC)
+    return (highest + 1) // 2
 
 
 def periodic_orbit(
@@ -131,7 +136,9 @@ def periodic_orbit(
         newton_settings(case),
     )
     damping = integrator.damping.linear(model) if integrator.damping is not None else None
-    return periodic_response(model, drive, x_static, damping, correction=correction)
+    return periodic_response(
+        model, drive, x_static, damping, resolved_harmonics(case), correction=correction
+    )
 
 
 class CorrectableStart:
@@ -172,7 +179,7 @@ class CorrectableStart:
             orbit = self._orbit(correction)
             alignment = abs(float(self._in_phase_shape(orbit) @ self._shape_z))
             if alignment >= min_alignment:
-                self.solid.restart(*orbit.at(self.solid.time))
+                self.solid.restart(orbit)
         return alignment
 
     def _in_phase_shape(self, orbit: PeriodicResponse) -> NDArray:

@@ -25,6 +25,7 @@ from fsi_orchestrator.participant import (
     State,
 )
 
+from .harmonic import PeriodicResponse
 from .shell import NDOF, ShellModel
 from .solvers import DynamicState, TimeIntegrator
 
@@ -50,7 +51,9 @@ class ShellParticipant:
         x0: NDArray | None = None,
         v0: NDArray | None = None,
         a0: NDArray | None = None,
+        orbit: PeriodicResponse | None = None,
     ) -> None:
+        """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0."""
         self.model = model
         self.volts = volts
         self.loads = loads
@@ -60,6 +63,9 @@ class ShellParticipant:
         self.tip_node = model.mesh.nearest_node(*model.layout.tip_point)
         on_axis = np.flatnonzero(np.abs(model.mesh.nodes[:, 1]) < 1e-12 * model.layout.length_m)
         self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
+        self.orbit = orbit
+        if orbit is not None:
+            x0, v0, a0 = orbit.at(t0)
         self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0, a0)
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
         # this window's last solution (a private copy): Newton's start when the window is solved
@@ -67,12 +73,20 @@ class ShellParticipant:
         # it equals the state, i.e. the usual start
         self._answer: NDArray | None = None
 
-    def restart(self, x0: NDArray, v0: NDArray, a0: NDArray) -> None:
-        """Start again at the initial time from another state (a corrected periodic orbit)."""
+    def restart(self, orbit: PeriodicResponse) -> None:
+        """Start again at the initial time on another periodic orbit (a corrected one)."""
+        self.orbit = orbit
         self.state = self.integrator.initial_state(
-            self.state.t, self.external_load, self.volts, x0, v0, a0
+            self.state.t, self.external_load, self.volts, *orbit.at(self.state.t)
         )
         self._checkpoint, self._answer = None, None
+
+    def orbit_displacement(self, t: float) -> NDArray | None:
+        """The nodes' translations (n, 3) on the periodic orbit the structure started on, at
+        any time t (a fluid lead-in before t = 0 follows it); None without one."""
+        if self.orbit is None:
+            return None
+        return self.orbit.at(t)[0].reshape(self.model.n_nodes, NDOF)[:, :3].copy()
 
     def initialize_data(self, data: Mapping[str, NDArray]) -> None:
         """Values at the initial time, before the first window. ``force``: the coupled load,
