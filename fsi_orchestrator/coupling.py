@@ -401,11 +401,12 @@ def _smoothstep(s: float) -> float:
 
 
 def _periodic_motion(solid: Participant, omega: float):
-    """u(t): the interface motion on the periodic orbit the structure started on, with all
-    its harmonics (``orbit_displacement``, optional in the protocol); else the harmonic
+    """u(t): the interface motion on the periodic orbit the structure starts on now, with all
+    its harmonics (``orbit_motion``, optional in the protocol); else the harmonic
     u0 cos wt + v0/w sin wt through its state at t = 0."""
-    on_orbit = getattr(solid, "orbit_displacement", None)
-    if on_orbit is not None and on_orbit(0.0) is not None:
+    orbit_motion = getattr(solid, "orbit_motion", None)
+    on_orbit = orbit_motion() if orbit_motion is not None else None
+    if on_orbit is not None:
         return on_orbit
     state = solid.write_data()
     u0, v0 = state[DISPLACEMENT], state[VELOCITY]

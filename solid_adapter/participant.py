@@ -7,7 +7,7 @@ velocity at the window end. Checkpoints are copies of the integrator state.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -81,12 +81,14 @@ class ShellParticipant:
         )
         self._checkpoint, self._answer = None, None
 
-    def orbit_displacement(self, t: float) -> NDArray | None:
-        """The nodes' translations (n, 3) on the periodic orbit the structure started on, at
-        any time t (a fluid lead-in before t = 0 follows it); None without one."""
-        if self.orbit is None:
+    def orbit_motion(self) -> Callable[[float], NDArray] | None:
+        """t -> the nodes' translations (n, 3) on the periodic orbit the structure starts on
+        now, at any time t (a fluid lead-in before t = 0 follows it); None without one. It
+        keeps that orbit: a later restart on another one does not change it."""
+        orbit, n = self.orbit, self.model.n_nodes
+        if orbit is None:
             return None
-        return self.orbit.at(t)[0].reshape(self.model.n_nodes, NDOF)[:, :3].copy()
+        return lambda t: orbit.at(t)[0].reshape(n, NDOF)[:, :3].copy()
 
     def initialize_data(self, data: Mapping[str, NDArray]) -> None:
         """Values at the initial time, before the first window. ``force``: the coupled load,

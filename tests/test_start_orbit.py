@@ -126,3 +126,29 @@ def test_a_square_wave_start_holds_the_harmonics_the_time_step_resolves():
 
 def _steps(case, steps_per_period):
     return dataclasses.replace(case.time, steps_per_period=steps_per_period)
+
+
+def test_the_lead_in_blends_from_the_orbit_it_started_on():
+    """The second lead-in period blends the fluid's motion from the old orbit into the
+    corrected one: a motion taken before the restart must keep the old orbit (a bound method
+    reading the current orbit made the blend jump to the new one at once)."""
+    from fsi_orchestrator.case.loader import load_case
+    from fsi_orchestrator.coupling import _periodic_motion
+    from solid_adapter.build import build_shell_participant
+    from solid_adapter.harmonic import PeriodicResponse
+    from solid_adapter.shell import NDOF
+
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", ["fluid.model=potential"])
+    solid = build_shell_participant(case)
+    omega = 2 * np.pi * case.actuation.frequency_hz
+    old = _periodic_motion(solid, omega)
+    before = old(0.01).copy()
+    orbit = solid.orbit
+    doubled = PeriodicResponse(
+        orbit.omega, orbit.x_static, [(k, 2 * X) for k, X in orbit.harmonics]
+    )
+    solid.restart(doubled)
+    np.testing.assert_array_equal(old(0.01), before)
+    new = _periodic_motion(solid, omega)
+    swing = new(0.01)[:, 2] - orbit.x_static[2::NDOF]
+    np.testing.assert_allclose(swing, 2 * (before[:, 2] - orbit.x_static[2::NDOF]), atol=1e-15)
