@@ -107,11 +107,15 @@ def main() -> None:
                     shutil.rmtree(root / f"{level}-{driver}-{processes}", ignore_errors=True)
     finally:
         shutil.rmtree(root, ignore_errors=True)
-    for level in args.levels:
-        for processes in args.processes:
-            pair = {
-                r["driver"]: r for r in rows if (r["level"], r["processes"]) == (level, processes)
-            }
+    _summary(rows)
+
+
+def _summary(rows: list[dict]) -> None:
+    """Relaunch overhead per (level, ranks); speed-up and force difference against serial."""
+    for level in dict.fromkeys(r["level"] for r in rows):
+        here = [r for r in rows if r["level"] == level]
+        for processes in dict.fromkeys(r["processes"] for r in here):
+            pair = {r["driver"]: r for r in here if r["processes"] == processes}
             if {"persistent", "relaunch"} <= pair.keys():
                 extra = pair["relaunch"]["s_per_window"] - pair["persistent"]["s_per_window"]
                 share = extra / pair["persistent"]["s_per_window"]
@@ -119,10 +123,10 @@ def main() -> None:
                     f"{level}, {processes} rank(s): relaunch overhead {extra:.2f} s per window "
                     f"({share:.0%} of a persistent window)"
                 )
-        serial = {r["driver"]: r for r in rows if (r["level"], r["processes"]) == (level, 1)}
-        for r in rows:
+        serial = {r["driver"]: r for r in here if r["processes"] == 1}
+        for r in here:
             base = serial.get(r["driver"])
-            if r["level"] == level and r["processes"] > 1 and base is not None:
+            if r["processes"] > 1 and base is not None:
                 speedup = base["s_per_window"] / r["s_per_window"]
                 diff = abs(r["lateral_force_n"] - base["lateral_force_n"])
                 print(

@@ -65,6 +65,8 @@ class ShellParticipant:
         self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
         self.orbit = orbit
         if orbit is not None:
+            if x0 is not None or v0 is not None or a0 is not None:
+                raise ValueError("give either a start state (x0, v0, a0) or an orbit, not both")
             x0, v0, a0 = orbit.at(t0)
         self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0, a0)
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
