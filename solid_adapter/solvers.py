@@ -93,8 +93,9 @@ def newton(
     settings: NewtonSettings,
     where: str,
     reference: float = 0.0,
+    free: NDArray | None = None,
 ) -> tuple[NDArray, int]:
-    """Solve residual(x) = 0 on the free DOFs.
+    """Solve residual(x) = 0 on the free DOFs (``free``, default the model's).
 
     Converged when the scaled increment falls below tolerance times the larger of the first
     increment of this solve and ``reference`` (the scaled size of the motion the start x0
@@ -105,12 +106,13 @@ def newton(
     """
     x = x0.copy()
     scale = dof_scale(model)
+    free = model.free_dofs if free is None else free
     r, K, *update = residual(x, True)
     first = None
     for it in range(1, settings.max_iterations + 1):
         if not np.all(np.isfinite(r)):
             raise SolverError(f"shell: NaN in the residual {where} (Newton iteration {it})")
-        dx = solve_linear(K, -r, model.free_dofs, update[0] if update else None)
+        dx = solve_linear(K, -r, free, update[0] if update else None)
         if not np.all(np.isfinite(dx)):
             raise SolverError(
                 f"shell: singular tangent {where} (Newton iteration {it}); is the "
@@ -158,6 +160,24 @@ def _line_search(
 # --------------------------------------------------------------------------- static
 
 
+def static_free_dofs(model: ShellModel) -> NDArray:
+    """The DOFs a static solve moves. A clamped plate: its free DOFs. A free plate (free-free,
+    ``boundary.head = "free"``) has six rigid-body modes and a singular stiffness; a
+    statically determinate support holds them - all DOFs of the node nearest the plate's
+    first tenth on the centre line and u_y of a second centre-line node behind it. The
+    piezo load is internal and self-equilibrated, so the support carries no reaction and
+    the deformation is the free plate's (up to a rigid motion)."""
+    if model.fixed_dofs.any():
+        return model.free_dofs
+    length = model.layout.length_m
+    first = model.mesh.nearest_node(0.1 * length, 0.0)
+    second = model.mesh.nearest_node(0.5 * length, 0.0)
+    free = model.free_dofs.copy()
+    free[first * NDOF : (first + 1) * NDOF] = False
+    free[second * NDOF + 1] = False
+    return free
+
+
 def solve_static(
     model: ShellModel,
     loads: LoadFn,
@@ -167,7 +187,9 @@ def solve_static(
     callback: Callable[[int, float, NDArray], None] | None = None,
 ) -> NDArray:
     """Load stepping on lambda = k/steps; ``loads(lam, x, tangent)`` and ``volts(lam)`` scale
-    with lambda."""
+    with lambda. A free plate is held by a statically determinate support
+    (:func:`static_free_dofs`)."""
+    free = static_free_dofs(model)
     x = model.zero_state()
     for k in range(1, steps + 1):
         lam = k / steps
@@ -179,7 +201,7 @@ def solve_static(
             f, Kf = loads(lam, xx, tangent)
             return r - f, (K - Kf) if (K is not None and Kf is not None) else K
 
-        x, _ = newton(residual, x, model, settings, f"in load step {k}/{steps}")
+        x, _ = newton(residual, x, model, settings, f"in load step {k}/{steps}", free=free)
         if callback is not None:
             callback(k, lam, x)
     return x
@@ -198,10 +220,11 @@ def relax_fast_dofs(
     equilibrium with the normal translations, which are held: x_fast solves r_fast(x) = 0 and
     each rate's fast part is -K_ff^-1 K_fs (rate)_slow, that relation's derivative. A state
     built by linear superposition lacks the in-plane shortening of a bent plate; its membrane
-    and shear forces would otherwise kick the stiff in-plane modes and the massless rotations."""
+    and shear forces would otherwise kick the stiff in-plane modes and the massless rotations.
+    A free plate's in-plane rigid motion is held where statics hold it (static_free_dofs)."""
     fast = np.ones((model.n_nodes, NDOF), dtype=bool)
     fast[:, 2] = False
-    fast = fast.ravel() & model.free_dofs
+    fast = fast.ravel() & static_free_dofs(model)
     slow = ~fast & model.free_dofs
     x = x.copy()
     first = None

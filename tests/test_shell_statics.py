@@ -9,6 +9,7 @@ from scipy.optimize import brentq
 
 from solid_adapter.build import build_shell_model, run_static
 from solid_adapter.materials import MFC
+from solid_adapter.solvers import static_free_dofs
 from tests.conftest import rectangle
 
 
@@ -213,3 +214,39 @@ def test_factorize_solves_a_tangent_that_needs_pivoting():
         A = sp.csc_matrix(np.array(dense))
         b = np.array([1.0, 2.0, 3.0])
         np.testing.assert_allclose(A @ factorize(A).solve(b), b, rtol=0, atol=1e-12)
+
+
+def test_a_free_bimorph_strip_curls_into_the_clamped_arc_about_its_support(make_case):
+    """A free plate (boundary.head = "free") has no stiffness against rigid motion; statics hold
+    it by a statically determinate support (solvers.static_free_dofs) that carries no reaction
+    under the self-equilibrated piezo load. So the strip curls into the same circular arc as a
+    clamped one, about the held node: each end's deflection relative to it is that of a strip
+    clamped there with the end's distance as its length."""
+    core = (Q_CFRP, -TC / 2, TC / 2, None)
+    layers = [core, (Q_MFC, TC / 2, TC / 2 + TM, 1500.0), (Q_MFC, -TC / 2 - TM, -TC / 2, -500.0)]
+    eps, kappa = laminated_beam_curvature([(8e-3, layers)])
+    length = 87e-3
+    case = make_case(
+        geometry={
+            "kind": "beam",
+            "actuator_sides": "both",
+            "actuator_length_m": length,
+            "actuator_width_m": 8e-3,
+            "actuator_start_x_m": 0.0,
+        },
+        boundary={"head": "free"},
+        analysis={"kind": "static", "load_steps": 4},
+        actuation={"static_volts": [1500.0, -500.0]},
+    )
+    model = build_shell_model(case)
+    assert not model.fixed_dofs.any()
+    held = static_free_dofs(model)
+    assert (~held).sum() == 6  # one node's five DOFs and a second node's u_y
+    x = run_static(case, model).x.reshape(-1, 5)
+    support = np.flatnonzero((~held).reshape(-1, 5).all(axis=1))[0]
+    xs = model.mesh.nodes[support, 0]
+    tail = model.mesh.nearest_node(length, 0.0)
+    nose = model.mesh.nearest_node(0.0, 0.0)
+    for end, arm in ((tail, length - xs), (nose, xs)):
+        w_ref = arc_tip_deflection(kappa, eps, 0.0, arm, arm)
+        assert -(x[end, 2] - x[support, 2]) == pytest.approx(w_ref, rel=2e-2)

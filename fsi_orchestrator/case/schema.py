@@ -306,7 +306,8 @@ class Boundary:
     head: HeadCondition = param(
         HeadCondition.CLAMPED,
         'fish: head clamped ("fixed head") or '
-        "free (free-free modal study); rectangle/beam: x = 0 edge "
+        "free (free-free modes; a free body in dynamic runs, its static "
+        "start held by a reaction-free support); rectangle/beam: x = 0 edge "
         "clamped or free.",
     )
     clamp_length_m: float | None = param(
