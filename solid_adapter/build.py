@@ -117,6 +117,20 @@ def resolved_harmonics(case: Case) -> int:
     return (highest + 1) // 2
 
 
+def mean_voltage_equilibrium(
+    case: Case, model: ShellModel, drive: DriveSignal, loads: StaticLoads
+) -> NDArray:
+    """The static state under the drive's mean voltages (and the static loads)."""
+    mean = mean_volts(drive)
+    return solve_static(
+        model,
+        lambda lam, x, tangent: (lam * loads.edge, None),
+        lambda lam: lam * mean,
+        4,
+        newton_settings(case),
+    )
+
+
 def periodic_orbit(
     case: Case,
     model: ShellModel,
@@ -127,14 +141,7 @@ def periodic_orbit(
 ) -> PeriodicResponse:
     """The linear periodic response about the mean-voltage equilibrium, with an optional
     fluid force the inertia does not hold (see ModalCorrection)."""
-    mean = mean_volts(drive)
-    x_static = solve_static(
-        model,
-        lambda lam, x, tangent: (lam * loads.edge, None),
-        lambda lam: lam * mean,
-        4,
-        newton_settings(case),
-    )
+    x_static = mean_voltage_equilibrium(case, model, drive, loads)
     damping = integrator.damping.linear(model) if integrator.damping is not None else None
     return periodic_response(
         model, drive, x_static, damping, resolved_harmonics(case), correction=correction

@@ -95,13 +95,22 @@ def periodic_response(
     damping: sp.spmatrix | None = None,
     n_harmonics: int = 15,
     correction: ModalCorrection | None = None,
+    prestressed: bool = False,
 ) -> PeriodicResponse:
     """Linear steady state about ``x_static`` (the equilibrium under the mean voltages). A
     ``correction`` adds the rank-one term (-w^2 p + i w d) e^T to each harmonic's operator
-    (Sherman-Morrison); an amplitude-dependent damping is resolved for the fundamental."""
+    (Sherman-Morrison); an amplitude-dependent damping is resolved for the fundamental.
+    The operator is the unloaded flat plate's unless ``prestressed``: then the tangent and the
+    piezo load are taken at x_static with the mean voltages (mean_voltage_tangent). The
+    transient start keeps the flat operator: from the prestressed orbit the unimorph beam's
+    first Newton step diverged (docs/coupling.md, stop 16)."""
     omega = 2 * np.pi * drive.frequency_hz
-    K = model.internal(model.zero_state(), np.zeros(2))[1]
-    load = harmonic_load(model, drive)
+    if prestressed:
+        K = mean_voltage_tangent(model, x_static, drive)
+        load = harmonic_load(model, drive, x_static)
+    else:
+        K = model.internal(model.zero_state(), np.zeros(2))[1]
+        load = harmonic_load(model, drive)
     free = model.free_dofs
     solved = []  # (k, w, A^-1 F, A^-1 p, A^-1 d)
     for k, c in harmonic_amplitudes(drive, n_harmonics):
@@ -154,6 +163,16 @@ def mean_volts(drive: DriveSignal) -> NDArray:
     return np.array([(lo_l + hi_l) / 2, (lo_r + hi_r) / 2])
 
 
+def mean_voltage_tangent(model: ShellModel, x_static: NDArray, drive: DriveSignal) -> sp.spmatrix:
+    """The tangent the drive oscillates about: at the equilibrium under the mean voltages,
+    with their prestress. Where an active area is embedded in passive plate (the fish) its
+    mean expansion is held by the plate around it, and that in-plane prestress changes the
+    bending stiffness: the free original fish at 3 Hz swings 6.15 mm about this state and
+    7.22 mm about the unloaded plate, the nonlinear transient 6.16 mm (docs/coupling.md).
+    The linear sweep (fsi-sweep --method linear) oscillates about it."""
+    return model.internal(x_static, mean_volts(drive))[1]
+
+
 @dataclass(frozen=True)
 class ModalSweep:
     """Frequency response by modal superposition with a static correction (the "modal
@@ -176,16 +195,26 @@ class ModalSweep:
         load: NDArray,
         n_modes: int,
         rayleigh: tuple[float, float] = (0.0, 0.0),
+        stiffness: sp.spmatrix | None = None,
     ) -> ModalSweep:
-        from .solvers import modal_analysis
+        """``stiffness``: the tangent to oscillate about (mean_voltage_tangent; default the
+        unloaded plate's)."""
+        from .solvers import modal_analysis, rigid_body_modes, static_free_dofs
 
-        K = model.internal(model.zero_state(), np.zeros(2))[1]
+        K = stiffness
+        if K is None:
+            K = model.internal(model.zero_state(), np.zeros(2))[1]
         result = modal_analysis(model, n_modes, stiffness=K)
         omegas = 2 * np.pi * result.frequencies_hz
         alpha, beta = rayleigh
-        free = model.free_dofs
+        # K^-1 F; a free plate: held by the reaction-free static support, then without the
+        # rigid motion that support chose (the elastic modes are inertia-orthogonal to it)
+        held = static_free_dofs(model)
         static = np.zeros(model.ndof)
-        static[free] = spla.spsolve(sp.csc_matrix(K[free][:, free]), load[free])
+        static[held] = spla.spsolve(sp.csc_matrix(K[held][:, held]), load[held])
+        if result.rigid_modes:
+            rigid = rigid_body_modes(model, K)
+            static -= rigid.T @ (rigid @ (model.inertia @ static))
         return cls(
             omegas=omegas,
             shapes=result.shapes,
@@ -200,9 +229,10 @@ class ModalSweep:
         return self.static + (self.modal_load * dynamic) @ self.shapes
 
 
-def harmonic_load(model: ShellModel, drive: DriveSignal) -> NDArray:
-    """Load vector of a unit oscillation s(t): F_V [amp_L, -amp_R] on the flat plate."""
-    per_volt = piezo_load_per_volt(model)
+def harmonic_load(model: ShellModel, drive: DriveSignal, x: NDArray | None = None) -> NDArray:
+    """Load vector of a unit oscillation s(t): F_V [amp_L, -amp_R] at x (default the flat
+    plate)."""
+    per_volt = piezo_load_per_volt(model, x)
     (lo_l, hi_l), (lo_r, hi_r) = drive.left_volts, drive.right_volts
     return per_volt[0] * (hi_l - lo_l) / 2 - per_volt[1] * (hi_r - lo_r) / 2
 

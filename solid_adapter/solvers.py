@@ -645,6 +645,15 @@ def modal_analysis(
     return ModalResult(np.sqrt(np.maximum(w2, 0.0)) / (2 * np.pi), shapes, rigid)
 
 
+def rigid_body_modes(model: ShellModel, stiffness: sp.spmatrix | None = None) -> NDArray:
+    """The six rigid-body modes (6, ndof) of an unsupported plate, inertia-normalised: the
+    null space of the reference tangent, as modal_analysis finds and drops it."""
+    K = stiffness if stiffness is not None else model.internal(model.zero_state(), np.zeros(2))[1]
+    M = sp.csc_matrix(model.inertia)
+    _, vec = spla.eigsh(sp.csc_matrix(K), k=6, M=M, sigma=-1.0, which="LM")
+    return vec.T
+
+
 def mode_kind(model: ShellModel, shape: NDArray) -> str:
     """ "bending" (out-of-plane, symmetric across y), "torsion" (out-of-plane, antisymmetric)
     or "in-plane", from the mode's nodal translations."""

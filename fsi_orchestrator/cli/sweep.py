@@ -46,23 +46,24 @@ def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
 
 def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]) -> list[dict]:
     from fluid_adapter.slender_body import mean_thrust_from_shell
-    from solid_adapter.build import newton_settings, rayleigh_coefficients, static_loads
-    from solid_adapter.harmonic import ModalSweep, harmonic_load, mean_volts, sweep_response
+    from solid_adapter.build import mean_voltage_equilibrium, rayleigh_coefficients, static_loads
+    from solid_adapter.harmonic import (
+        ModalSweep,
+        harmonic_load,
+        mean_voltage_tangent,
+        sweep_response,
+    )
     from solid_adapter.piezo import DriveSignal
-    from solid_adapter.solvers import solve_static
 
     model, _ = shell_with_fast_fluid(case)
     drive0 = DriveSignal.from_case(case)
-    loads, mean = static_loads(case, model), mean_volts(drive0)
-    x_static = solve_static(
-        model,
-        lambda lam, x, t: (lam * loads.edge, None),
-        lambda lam: lam * mean,
-        4,
-        newton_settings(case),
-    )
+    x_static = mean_voltage_equilibrium(case, model, drive0, static_loads(case, model))
     sweep = ModalSweep.build(
-        model, harmonic_load(model, drive0), MODES, rayleigh_coefficients(case, model)
+        model,
+        harmonic_load(model, drive0, x_static),
+        MODES,
+        rayleigh_coefficients(case, model),
+        stiffness=mean_voltage_tangent(model, x_static, drive0),
     )
     midline = _midline(model)
     xs = model.mesh.nodes[midline, 0]
