@@ -101,9 +101,9 @@ def periodic_response(
     ``correction`` adds the rank-one term (-w^2 p + i w d) e^T to each harmonic's operator
     (Sherman-Morrison); an amplitude-dependent damping is resolved for the fundamental.
     The operator is the unloaded flat plate's unless ``prestressed``: then the tangent and the
-    piezo load are taken at x_static with the mean voltages (mean_voltage_tangent). The
-    transient start keeps the flat operator: from the prestressed orbit the unimorph beam's
-    first Newton step diverged (docs/coupling.md, stop 16)."""
+    piezo load are taken at x_static with the mean voltages (mean_voltage_tangent), and
+    ``damping`` should be taken about that state too. The transient start keeps the flat
+    operator, as the transient's Rayleigh damping keeps the flat tangent (docs/coupling.md)."""
     omega = 2 * np.pi * drive.frequency_hz
     if prestressed:
         K = mean_voltage_tangent(model, x_static, drive)
