@@ -152,3 +152,53 @@ def test_the_lead_in_blends_from_the_orbit_it_started_on():
     new = _periodic_motion(solid, omega)
     swing = new(0.01)[:, 2] - orbit.x_static[2::NDOF]
     np.testing.assert_allclose(swing, 2 * (before[:, 2] - orbit.x_static[2::NDOF]), atol=1e-15)
+
+
+def test_the_fitting_lead_in_period_moves_no_faster_than_the_cfd_resolves():
+    """At 25 Hz the clamped fish's undamped fast orbit sits on its wet torsion modes and moved
+    the fin at 3.5 m/s, which blew the coarse CFD up within the first lead-in period. That
+    period only serves the fit, so it is scaled down to LEAD_IN_MAX_SPEED_M_S; the second
+    period blends into the corrected orbit."""
+    from fluid_adapter.potential.participant import PotentialParticipant
+    from fsi_orchestrator.case.loader import load_case
+    from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, coupled_setup
+    from fsi_orchestrator.coupling import LEAD_IN_MAX_SPEED_M_S, Coupling, _periodic_motion
+    from fsi_orchestrator.participant import DISPLACEMENT
+    from solid_adapter.build import CorrectableStart
+
+    frequency, n = 25.0, 40
+    case = load_case(
+        ROOT / "cases" / "fixed_head_3Hz",
+        [
+            "fluid.model=potential",
+            "coupling.partitioned=true",
+            f"actuation.frequency_hz={frequency}",
+        ],
+    )
+    moved = []
+
+    class Recording(PotentialParticipant):
+        def read_data(self, data):
+            moved.append(np.array(data[DISPLACEMENT]))
+            super().read_data(data)
+
+    def recording_liquid(case, solid):
+        return Recording(added_mass_for_preconditioning(case, solid.model), solid.interface())
+
+    solid, coupling = coupled_setup(case, recording_liquid)
+    estimate = coupling.fluid.added_mass.matrix
+    start = CorrectableStart(case, solid.model, solid, estimate)
+    settings = dataclasses.replace(
+        coupling.settings, lead_in_windows=n, lead_in_omega=2 * np.pi * frequency
+    )
+    coupling = Coupling(
+        coupling.fluid, solid.interface().points, settings, estimate, start_orbit=start
+    )
+    dt = 1.0 / (frequency * n)
+    orbit = _periodic_motion(solid, 2 * np.pi * frequency)
+    orbit_speed = max(np.abs(orbit(k * dt) - orbit((k - 1) * dt)).max() / dt for k in range(-n, 1))
+    coupling.lead_in(solid, dt)
+    first = np.array(moved[:n])
+    speed = np.abs(np.diff(first, axis=0)).max() / dt
+    assert orbit_speed > 1.5 * LEAD_IN_MAX_SPEED_M_S  # 4.7 m/s here (3.5 m/s in the tank)
+    assert speed <= LEAD_IN_MAX_SPEED_M_S * 1.001
