@@ -19,6 +19,17 @@ def make_case(tmp_path):
     return make
 
 
+# Table 3.2's strip (87 x 8 mm) with an MFC over its whole length on both faces: a uniform
+# bimorph, whose free-strain curvature is analytic
+BIMORPH_STRIP = {
+    "kind": "beam",
+    "actuator_sides": "both",
+    "actuator_length_m": 87e-3,
+    "actuator_width_m": 8e-3,
+    "actuator_start_x_m": 0.0,
+}
+
+
 def rectangle(length=10.0, width=1.0, thickness=0.1, E=1.2e6, nu=0.0, rho=1.0, **extra):
     sections = {
         "geometry": {

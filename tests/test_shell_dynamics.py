@@ -8,7 +8,7 @@ import pytest
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, Participant
 from solid_adapter.build import build_shell_model, build_shell_participant, run_static
 from solid_adapter.solvers import make_integrator, modal_analysis
-from tests.conftest import rectangle
+from tests.conftest import BIMORPH_STRIP, rectangle
 
 
 def _released_strip(make_case, tip_force, elements=4):
@@ -143,13 +143,7 @@ def test_a_free_piezo_strip_keeps_zero_momentum(make_case):
     (generalized-alpha keeps it exactly for self-equilibrated forces) - no drift, while the ends
     swing."""
     case = make_case(
-        geometry={
-            "kind": "beam",
-            "actuator_sides": "both",
-            "actuator_length_m": 87e-3,
-            "actuator_width_m": 8e-3,
-            "actuator_start_x_m": 0.0,
-        },
+        geometry=BIMORPH_STRIP,
         boundary={"head": "free"},
         actuation={"frequency_hz": 20.0},
         analysis={"kind": "dynamic", "rho_infinity": 0.5},

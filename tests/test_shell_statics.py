@@ -10,7 +10,7 @@ from scipy.optimize import brentq
 from solid_adapter.build import build_shell_model, run_static
 from solid_adapter.materials import MFC
 from solid_adapter.solvers import static_free_dofs
-from tests.conftest import rectangle
+from tests.conftest import BIMORPH_STRIP, rectangle
 
 
 def test_linear_cantilever_tip_load_matches_beam_theory(make_case):
@@ -182,13 +182,7 @@ def test_bimorph_uniform_strip_static_tip_deflection(make_case):
     eps, kappa = laminated_beam_curvature([(8e-3, layers)])
     w_ref = arc_tip_deflection(kappa, eps, 0.0, 87e-3, 87e-3)
     case = make_case(
-        geometry={
-            "kind": "beam",
-            "actuator_sides": "both",
-            "actuator_length_m": 87e-3,
-            "actuator_width_m": 8e-3,
-            "actuator_start_x_m": 0.0,
-        },
+        geometry=BIMORPH_STRIP,
         analysis={"kind": "static", "load_steps": 4},
         actuation={"static_volts": [1500.0, -500.0]},
     )
@@ -227,13 +221,7 @@ def test_a_free_bimorph_strip_curls_into_the_clamped_arc_about_its_support(make_
     eps, kappa = laminated_beam_curvature([(8e-3, layers)])
     length = 87e-3
     case = make_case(
-        geometry={
-            "kind": "beam",
-            "actuator_sides": "both",
-            "actuator_length_m": length,
-            "actuator_width_m": 8e-3,
-            "actuator_start_x_m": 0.0,
-        },
+        geometry=BIMORPH_STRIP,
         boundary={"head": "free"},
         analysis={"kind": "static", "load_steps": 4},
         actuation={"static_volts": [1500.0, -500.0]},
