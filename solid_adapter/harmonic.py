@@ -199,7 +199,7 @@ class ModalSweep:
     ) -> ModalSweep:
         """``stiffness``: the tangent to oscillate about (mean_voltage_tangent; default the
         unloaded plate's)."""
-        from .solvers import modal_analysis, rigid_body_modes, static_free_dofs
+        from .solvers import modal_analysis, static_free_dofs
 
         K = stiffness
         if K is None:
@@ -212,8 +212,8 @@ class ModalSweep:
         held = static_free_dofs(model)
         static = np.zeros(model.ndof)
         static[held] = spla.spsolve(sp.csc_matrix(K[held][:, held]), load[held])
-        if result.rigid_modes:
-            rigid = rigid_body_modes(model, K)
+        if result.rigid_shapes is not None:
+            rigid = result.rigid_shapes
             static -= rigid.T @ (rigid @ (model.inertia @ static))
         return cls(
             omegas=omegas,

@@ -620,6 +620,7 @@ class ModalResult:
     frequencies_hz: NDArray
     shapes: NDArray  # (num_modes, ndof), mass-normalised
     rigid_modes: int
+    rigid_shapes: NDArray | None = None  # (rigid_modes, ndof), inertia-normalised
 
 
 def modal_analysis(
@@ -639,19 +640,15 @@ def modal_analysis(
     k = num_modes + rigid
     w2, vec = spla.eigsh(Kff, k=k, M=Mff, sigma=-1.0, which="LM")
     order = np.argsort(w2)
-    w2, vec = w2[order][rigid:], vec[:, order][:, rigid:]
+    w2, vec = w2[order], vec[:, order]
     shapes = np.zeros((len(w2), model.ndof))
     shapes[:, free] = vec.T
-    return ModalResult(np.sqrt(np.maximum(w2, 0.0)) / (2 * np.pi), shapes, rigid)
-
-
-def rigid_body_modes(model: ShellModel, stiffness: sp.spmatrix | None = None) -> NDArray:
-    """The six rigid-body modes (6, ndof) of an unsupported plate, inertia-normalised: the
-    null space of the reference tangent, as modal_analysis finds and drops it."""
-    K = stiffness if stiffness is not None else model.internal(model.zero_state(), np.zeros(2))[1]
-    M = sp.csc_matrix(model.inertia)
-    _, vec = spla.eigsh(sp.csc_matrix(K), k=6, M=M, sigma=-1.0, which="LM")
-    return vec.T
+    return ModalResult(
+        np.sqrt(np.maximum(w2[rigid:], 0.0)) / (2 * np.pi),
+        shapes[rigid:],
+        rigid,
+        shapes[:rigid] if rigid else None,
+    )
 
 
 def mode_kind(model: ShellModel, shape: NDArray) -> str:
