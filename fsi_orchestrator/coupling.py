@@ -193,9 +193,9 @@ class Coupling:
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
         # motion is checked for (issue 4: +-40 mm at the tail) and at a speed the CFD resolves
-        path = [old(t) for t in [times[0] - dt, *times]]
-        peak = max(float(np.max(np.abs(u))) for u in path)
-        speed = max(float(np.max(np.abs(b - a))) for a, b in pairwise(path)) / dt
+        samples = [times[0] - dt, *times]
+        peak = max(float(np.max(np.abs(old(t)))) for t in samples)
+        speed = peak_speed(old, samples)
         cap = min(
             1.0,
             LEAD_IN_MAX_AMPLITUDE_M / peak if peak > 0 else 1.0,
@@ -403,6 +403,15 @@ class Coupling:
         if self.accelerator is not None:
             self.accelerator.load_state(state["accelerator"])
         self.fluid.load_state(state["fluid"])
+
+
+def peak_speed(motion, times: list[float]) -> float:
+    """The largest speed of any interface node along u(t) between consecutive sample times."""
+    path = [motion(t) for t in times]
+    return max(
+        float(np.max(np.abs(b - a))) / (tb - ta)
+        for (ta, a), (tb, b) in pairwise(zip(times, path, strict=True))
+    )
 
 
 def _smoothstep(s: float) -> float:

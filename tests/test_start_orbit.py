@@ -202,3 +202,42 @@ def test_the_fitting_lead_in_period_moves_no_faster_than_the_cfd_resolves():
     speed = np.abs(np.diff(first, axis=0)).max() / dt
     assert orbit_speed > 1.5 * LEAD_IN_MAX_SPEED_M_S  # 4.7 m/s here (3.5 m/s in the tank)
     assert speed <= LEAD_IN_MAX_SPEED_M_S * 1.001
+
+
+def test_a_run_whose_fast_orbit_outruns_the_cfd_starts_from_rest():
+    """The periodic start leads the CFD onto the fast model's (undamped) orbit. At 25 Hz, near
+    the clamped fish's wet torsion and bending modes, that orbit moves the fin at 4.4 m/s,
+    more than the lead-in lets the CFD follow (2 m/s), and its corrected start left the
+    plate where the first coupled window never converged: such a run starts from rest with a
+    one-period voltage ramp and two periods added. At 3 Hz (0.33 m/s) the case is run as
+    given. The liquid stands in for OpenFOAM: the choice is made before the fluid is built."""
+    from fluid_adapter.potential.participant import PotentialParticipant
+    from fsi_orchestrator.case.loader import load_case
+    from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, build_coupled_run
+    from solid_adapter.shell import NDOF
+
+    def stand_in_liquid(case, solid):
+        return PotentialParticipant(
+            added_mass_for_preconditioning(case, solid.model), solid.interface()
+        )
+
+    runs = {
+        f: build_coupled_run(
+            load_case(
+                ROOT / "cases" / "fixed_head_3Hz",
+                [f"actuation.frequency_hz={f}", "time.periods=2", "fluid.mesh_level=coarse"],
+            ),
+            stand_in_liquid,
+        )
+        for f in (3, 25)
+    }
+    as_given = runs[3]
+    assert as_given.start_note is None
+    assert as_given.case.actuation.ramp_periods == 0 and as_given.case.time.periods == 2
+    assert as_given.coupling.settings.lead_in_windows == 40
+    ramped = runs[25]
+    assert "4.4 m/s" in ramped.start_note and "4 periods in all (2 asked for)" in ramped.start_note
+    assert ramped.case.actuation.ramp_periods == 1 and ramped.case.time.periods == 4
+    assert ramped.coupling.settings.lead_in_windows == 0
+    at_rest = ramped.solid.state.v.reshape(-1, NDOF)
+    assert np.all(at_rest == 0)

@@ -101,20 +101,84 @@ def is_coupled(case: Case) -> bool:
     )
 
 
+# a start from rest when the fast orbit outruns the CFD: periods of voltage ramp, then periods
+# to settle, before the periods the case asks for (the lead-in it replaces has two)
+RAMP_PERIODS = 1.0
+SETTLE_PERIODS = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class CoupledRun:
+    """What a partitioned run is built from. ``case`` is the case as run: a start from rest
+    (choose_start) changes its ramp and its number of periods; ``start_note`` says why."""
+
+    case: Case
+    solid: object
+    coupling: object
+    start_note: str | None = None
+
+
+def ramped_start(case: Case) -> Case:
+    """From rest, the voltage amplitude ramped up over RAMP_PERIODS, SETTLE_PERIODS more to
+    settle, then the periods asked for."""
+    actuation = dataclasses.replace(case.actuation, ramp_periods=RAMP_PERIODS)
+    periods = case.time.periods + RAMP_PERIODS + SETTLE_PERIODS
+    return dataclasses.replace(
+        case, actuation=actuation, time=dataclasses.replace(case.time, periods=periods)
+    )
+
+
+def choose_start(case: Case, solid) -> tuple[Case, str | None]:
+    """The periodic start leads the CFD onto the fast model's orbit (Coupling.lead_in). That
+    orbit has no fluid damping: near a wet resonance (20-28 Hz for the clamped fish) it moves
+    the plate faster than the lead-in lets the CFD follow (coupling.LEAD_IN_MAX_SPEED_M_S),
+    and at 25 Hz the orbit corrected from the capped lead-in started the plate where its
+    first coupled window never converged (docs/coupling.md). Such a run starts from rest with
+    a voltage ramp instead. Returns (the case as run, why it changed or None)."""
+    from ..case.timing import windows_per_period
+    from ..coupling import LEAD_IN_MAX_SPEED_M_S, peak_speed
+
+    motion = solid.orbit_motion() if lead_in(case) else None
+    if motion is None:
+        return case, None
+    n, period = windows_per_period(case), 1.0 / case.actuation.frequency_hz
+    speed = peak_speed(motion, [k * period / n for k in range(n + 1)])
+    if speed <= LEAD_IN_MAX_SPEED_M_S:
+        return case, None
+    ramped = ramped_start(case)
+    note = (
+        f"start: the fast model's periodic orbit moves the plate at {speed:.2g} m/s, faster "
+        f"than the CFD lead-in follows ({LEAD_IN_MAX_SPEED_M_S:g} m/s: near a wet resonance "
+        f"its amplitude is set by damping it does not know); starting from rest instead, the "
+        f"voltage ramped up over {RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods "
+        f"in all ({case.time.periods:g} asked for)"
+    )
+    return ramped, note
+
+
 def coupled_setup(case: Case, fluid_factory=None):
-    """(solid participant, Coupling) for a partitioned run. The structure starts on the periodic
-    orbit estimated with the fast added mass; with an *-am scheme it keeps that mass."""
+    """(solid participant, Coupling) for a partitioned run (see build_coupled_run)."""
+    run = build_coupled_run(case, fluid_factory)
+    return run.solid, run.coupling
+
+
+def build_coupled_run(case: Case, fluid_factory=None) -> CoupledRun:
+    """A partitioned run. The structure starts on the periodic orbit estimated with the fast
+    added mass (or from rest, choose_start); with an *-am scheme it keeps that mass."""
     from fluid_adapter.fast import fast_added_mass
     from fluid_adapter.potential.participant import PotentialParticipant
     from solid_adapter.build import CorrectableStart, build_shell_model, build_shell_participant
 
     from ..coupling import Coupling
 
-    settings = coupling_settings(case)
     model = build_shell_model(case)
     estimate = added_mass_for_preconditioning(case, model)
     model.set_added_mass(estimate.matrix)  # for the periodic start
     solid = build_shell_participant(case, model)
+    case, start_note = choose_start(case, solid)
+    if start_note is not None:
+        solid = build_shell_participant(case, model)
+    settings = coupling_settings(case)
     model.set_added_mass(
         settings.added_mass_scale * estimate.matrix if settings.uses_added_mass else None
     )
@@ -136,7 +200,7 @@ def coupled_setup(case: Case, fluid_factory=None):
         estimate.matrix if settings.uses_added_mass else None,
         start_orbit=start,
     )
-    return solid, coupling
+    return CoupledRun(case, solid, coupling, start_note)
 
 
 def openfoam_fluid_factory(workdir, *, fresh: bool):

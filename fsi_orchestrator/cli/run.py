@@ -4,6 +4,7 @@ summary (``--json`` for machines)."""
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Sequence
 from contextlib import contextmanager
@@ -17,7 +18,12 @@ from ..case.schema import AnalysisKind, FluidModel
 from ..case.timing import case_schedule, windows_per_period
 from ..loop import OutputSettings, Schedule, WindowLoop
 from .common import EXIT_OK, base_parser, emit, load, run_main
-from .compose import coupled_setup, is_coupled, openfoam_fluid_factory, shell_with_fast_fluid
+from .compose import (
+    build_coupled_run,
+    is_coupled,
+    openfoam_fluid_factory,
+    shell_with_fast_fluid,
+)
 from .modal import modal_summary
 
 
@@ -66,11 +72,15 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
 
 
 def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
+    start_note = None
     if is_coupled(case):
         factory = None
         if case.fluid.model is FluidModel.OPENFOAM:
             factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume)
-        solid, coupling = coupled_setup(case, factory)
+        run = build_coupled_run(case, factory)
+        case, solid, coupling, start_note = run.case, run.solid, run.coupling, run.start_note
+        if start_note is not None:
+            print(start_note, file=sys.stderr)
         added = None
     else:
         from solid_adapter.build import build_shell_participant
@@ -95,6 +105,8 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
             coupling.fluid.finalize()
     summary = dynamic_summary(case, path)
     if coupling is not None:
+        if start_note is not None:
+            summary["start_from_rest"] = start_note
         summary.update(coupling_summary(case, path, coupling))
         summary.update(fluid_force_summary(case, path))
     if added is not None or coupling is not None:

@@ -117,7 +117,7 @@ def transient_sweep(
             summary = run_dynamic(
                 with_drive(case, f, waveform), folder, resume=False, show_progress=False
             )
-            status = "ok"
+            status = "ok" if "start_from_rest" not in summary else "ok (started from rest)"
         except (SolverError, RuntimeError) as err:
             summary, status = {}, f"failed: {err}".splitlines()[0]
             print(f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr)
