@@ -18,6 +18,8 @@ from fsi_orchestrator.case import load_case
 from fsi_orchestrator.cli import run as run_cli
 from solid_adapter.build import run_static
 
+ROOT = Path(__file__).resolve().parents[1]
+
 CASE = """
 [geometry]
 kind = "rectangle"
@@ -117,3 +119,26 @@ def test_killed_run_resumes_to_the_same_result(tmp_path):
         assert np.ptp(tip[:, 2]) > 1e-3  # a real dynamic response (mm at the beam tip)
         np.testing.assert_allclose(b["shell/tip_displacement_m"][:], tip, rtol=0, atol=1e-12)
         np.testing.assert_array_equal(b["time_s"][:], a["time_s"][:])
+
+
+def test_the_fluid_force_summary_reports_the_turning_load_of_the_last_period(tmp_path):
+    """Unequal voltages on the two MFCs turn the fish (seed Sec. 4.5): the summary gives the
+    last period's mean lateral force and yaw moment (about the vertical y axis through the
+    nose) next to the thrust. A synthetic history: a mean lateral force of 0.2 N at x = 0.1 m
+    plus a swing that averages out over the period."""
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", ["time.steps_per_period=8"])
+    t = np.arange(24) / 24.0  # three periods of 8 windows
+    swing = np.sin(2 * np.pi * 3 * t)
+    force = np.column_stack([-0.01 + 0 * t, 0 * t, 0.2 + swing])
+    nose_to_load = np.array([0.1, 0.0, 0.0])
+    moment = np.cross(nose_to_load, force)
+    path = tmp_path / "results.h5"
+    with h5py.File(path, "w") as h5:
+        h5["fluid/thrust_n"] = -force[:, :1]
+        h5["fluid/force_n"] = force
+        h5["fluid/moment_nm"] = moment
+    summary = run_cli.fluid_force_summary(case, path)
+    assert summary["mean_thrust_n"] == pytest.approx(0.01)
+    assert summary["mean_lateral_force_n"] == pytest.approx(0.2)
+    assert summary["mean_yaw_moment_nm"] == pytest.approx(-0.1 * 0.2)  # M_y = z F_x - x F_z
+    assert summary["lateral_force_amplitude_n"] == pytest.approx(1.0, rel=0.01)

@@ -158,10 +158,19 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
             return {}
         thrust = h5["fluid/thrust_n"][:, 0]
         force = h5["fluid/force_n"][:]
+        moment = h5["fluid/moment_nm"][:] if "fluid/moment_nm" in h5 else None
     last = slice(-min(len(thrust), windows_per_period(case)), None)
+    turning = {}
+    if moment is not None:  # unequal voltages on the two MFCs turn the fish (seed Sec. 4.5)
+        turning = {
+            "mean_lateral_force_n": float(force[last, 2].mean()),
+            # about the vertical (y) axis through the nose, right-handed
+            "mean_yaw_moment_nm": float(moment[last, 1].mean()),
+        }
     return {
         "mean_thrust_n": float(thrust[last].mean()),
         "lateral_force_amplitude_n": float(np.ptp(force[last, 2]) / 2),
+        **turning,
     }
 
 
