@@ -6,7 +6,9 @@ This module knows solvers only through the Participant protocol.
 
 from __future__ import annotations
 
+import dataclasses
 import time as wallclock
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,6 +20,7 @@ from .participant import DISPLACEMENT, Participant
 from .results import (
     CHECKPOINT_FILE,
     RESULTS_FILE,
+    PvdSeries,
     ResultsFile,
     VtkSeries,
     read_checkpoint,
@@ -42,6 +45,8 @@ class OutputSettings:
     vtk: bool = True
     vtk_every: int = 1
     checkpoint_every: int = 10
+    # windows between a fluid's flow fields (participants with ``flow_fields()``); 0: none
+    flow_every: int = 0
     attributes: dict = field(default_factory=dict)
 
 
@@ -63,6 +68,8 @@ class WindowLoop:
         self.progress = progress or (lambda done, total: None)
         self.coupling = coupling
         self.window = 0
+        self._flow: dict[str, PvdSeries] = {}
+        self._flow_keep_until: float | None = None
 
     @property
     def participants(self) -> dict[str, Participant]:
@@ -85,6 +92,7 @@ class WindowLoop:
         results = ResultsFile(out / RESULTS_FILE, resume_rows=self.window if resume else None)
         results.set_attributes(self.output.attributes)
         vtk = self._vtk_writers(out / "vtk", keep_until=self.solid.time if resume else None)
+        self._flow_keep_until = self.solid.time if resume else None
         try:
             while self.window < self.schedule.n_windows:
                 start = wallclock.perf_counter()
@@ -120,10 +128,37 @@ class WindowLoop:
                 data = self.participants[name].write_data()
                 series.write(
                     self.window,
-                    self.participants[name].time,
+                    self.solid.time,  # the run's clock (a fluid's may count its lead-in)
                     data.get(DISPLACEMENT, np.zeros_like(series.mesh.points)),
                     data,
                 )
+
+        if self.output.flow_every and self.window % self.output.flow_every == 0:
+            self._write_flow_fields()
+
+    def _write_flow_fields(self) -> None:
+        """Flow fields a fluid writes itself (e.g. OpenFOAM's slices), moved into the PVD
+        series. A failure costs the pictures, not the run: one warning, no more attempts."""
+        for p in self.participants.values():
+            sample = getattr(p, "flow_fields", None)
+            if sample is None:
+                continue
+            try:
+                files = sample()
+            except RuntimeError as err:
+                warnings.warn(
+                    f"flow fields of window {self.window} not written, none will be for the "
+                    f"rest of the run (set output.flow_every = 0 to skip them): {err}",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+                self.output = dataclasses.replace(self.output, flow_every=0)
+                return
+            for name, path in files.items():
+                if name not in self._flow:
+                    directory = self.output.directory / "vtk"
+                    self._flow[name] = PvdSeries(directory, name, self._flow_keep_until)
+                self._flow[name].add_file(self.window, self.solid.time, path)
 
     def _vtk_writers(self, directory: Path, keep_until: float | None) -> dict[str, VtkSeries]:
         if not self.output.vtk:

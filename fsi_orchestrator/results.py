@@ -1,4 +1,5 @@
-"""Results written while the run goes: an HDF5 time series, restart checkpoints, VTU/PVD.
+"""Results written while the run goes: an HDF5 time series, restart checkpoints, VTU/PVD
+(interface meshes, and files a solver writes such as flow slices).
 
 ``results.h5`` holds one row per time window for every recorded quantity (datasets grow and are
 flushed each window, so a killed run keeps everything up to its last window). Checkpoints are
@@ -8,6 +9,7 @@ written to a temporary file and renamed, so a kill during the write leaves the p
 from __future__ import annotations
 
 import os
+import shutil
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
@@ -109,13 +111,12 @@ def read_checkpoint(path: Path) -> tuple[dict[str, Any], dict[str, dict[str, Any
     return everything, participants
 
 
-class VtkSeries:
-    """One VTU per written window plus a PVD collection ParaView opens as a time series."""
+class PvdSeries:
+    """A PVD collection ParaView opens as a time series; on resume (``keep_until``) the
+    entries up to that time are kept and later ones dropped."""
 
-    def __init__(
-        self, directory: Path, name: str, mesh: InterfaceMesh, keep_until: float | None = None
-    ) -> None:
-        self.directory, self.name, self.mesh = directory, name, mesh
+    def __init__(self, directory: Path, name: str, keep_until: float | None = None) -> None:
+        self.directory, self.name = directory, name
         directory.mkdir(parents=True, exist_ok=True)
         self.entries: list[tuple[float, str]] = []
         pvd = self.pvd_path
@@ -128,6 +129,33 @@ class VtkSeries:
     @property
     def pvd_path(self) -> Path:
         return self.directory / f"{self.name}.pvd"
+
+    def add_file(self, index: int, time: float, source: Path) -> Path:
+        """Move a file written elsewhere (e.g. by a solver) into the series as window ``index``."""
+        target = self.directory / f"{self.name}_{index:06d}{source.suffix}"
+        shutil.move(source, target)
+        self.entries.append((time, target.name))
+        self._write_pvd()
+        return target
+
+    def _write_pvd(self) -> None:
+        root = ET.Element("VTKFile", type="Collection", version="0.1")
+        coll = ET.SubElement(root, "Collection")
+        for t, f in self.entries:
+            ET.SubElement(coll, "DataSet", timestep=f"{t:.10g}", part="0", file=f)
+        tmp = self.pvd_path.with_suffix(".tmp")
+        ET.ElementTree(root).write(tmp, xml_declaration=True)
+        os.replace(tmp, self.pvd_path)
+
+
+class VtkSeries(PvdSeries):
+    """One VTU of an interface mesh per written window, collected in a PVD."""
+
+    def __init__(
+        self, directory: Path, name: str, mesh: InterfaceMesh, keep_until: float | None = None
+    ) -> None:
+        super().__init__(directory, name, keep_until)
+        self.mesh = mesh
 
     def write(
         self,
@@ -151,12 +179,3 @@ class VtkSeries:
         )
         self.entries.append((time, fname))
         self._write_pvd()
-
-    def _write_pvd(self) -> None:
-        root = ET.Element("VTKFile", type="Collection", version="0.1")
-        coll = ET.SubElement(root, "Collection")
-        for t, f in self.entries:
-            ET.SubElement(coll, "DataSet", timestep=f"{t:.10g}", part="0", file=f)
-        tmp = self.pvd_path.with_suffix(".tmp")
-        ET.ElementTree(root).write(tmp, xml_declaration=True)
-        os.replace(tmp, self.pvd_path)

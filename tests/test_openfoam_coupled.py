@@ -15,6 +15,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import h5py
@@ -34,6 +35,7 @@ SMALL = [
     "time.steps_per_period=20",
     "output.vtk=false",
 ]
+TAIL_X = 0.16676  # the original fish's trailing edge at mid-height (m, from the nose)
 CMD = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
 
 
@@ -52,9 +54,38 @@ def world_searchable():
     shutil.rmtree(root, ignore_errors=True)
 
 
+def assert_flow_slices(out: Path, windows: list[int], tip: np.ndarray) -> None:
+    """The flow slices of `windows` are in their PVD series at the run's times, carry p, U and
+    vorticity, and were cut through the moved mesh: the mid-height plane holds the plate's
+    trailing edge where the structure put its tail."""
+    import pyvista as pv
+
+    with h5py.File(out / "results.h5") as h5:
+        times = h5["time_s"][:].ravel()
+    for plane in ("midheight", "wake"):
+        pvd = ET.parse(out / "vtk" / f"flow_{plane}.pvd").getroot()
+        entries = [(float(d.get("timestep")), d.get("file")) for d in pvd.iter("DataSet")]
+        assert [f for _, f in entries] == [f"flow_{plane}_{w:06d}.vtp" for w in windows]
+        np.testing.assert_allclose([t for t, _ in entries], times[np.array(windows) - 1])
+        for _, name in entries:
+            mesh = pv.read(out / "vtk" / name)
+            assert {"p", "U", "vorticity"} <= set(mesh.point_data.keys())
+            assert mesh.n_points > 100 and np.isfinite(mesh.point_data["p"]).all()
+    last = pv.read(out / "vtk" / f"flow_midheight_{windows[-1]:06d}.vtp")
+    points = np.asarray(last.points)
+    assert np.ptp(points[:, 1]) < 1e-9  # horizontal
+    tail_x = points[np.abs(points[:, 2] - tip[2]) < 1e-6, 0]
+    assert abs(tip[2]) > 1e-3 and tail_x.size  # the displaced trailing edge, not the flat one
+    assert np.any(np.abs(tail_x - (TAIL_X + tip[0])) < 1e-3)
+
+
 def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     out = world_searchable / "run"
-    cmd = fsi_run(ROOT / "cases" / "fixed_head_3Hz", out, "--set", "time.periods=0.2")
+    cmd = fsi_run(
+        ROOT / "cases" / "fixed_head_3Hz",
+        out,
+        *("--set", "time.periods=0.2", "--set", "output.flow_every=2"),
+    )
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-3000:]
     summary = json.loads(done.stdout)
@@ -79,6 +110,7 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     # the liquid resists the motion: lateral force against the tail's acceleration, and
     # of the size of the fast added mass (~0.1-1 N), not noise
     assert 0.05 < np.abs(force[:, 2]).max() < 10
+    assert_flow_slices(out, [2, 4], np.array(summary["tip_displacement_m"]))
 
 
 def test_persistent_driver_runs_one_solve_per_window(world_searchable):
@@ -86,6 +118,7 @@ def test_persistent_driver_runs_one_solve_per_window(world_searchable):
     # one fluid step per window (the persistent driver does not sub-step): 40 per period
     extra = ["--set", "time.periods=0.1", "--set", "coupling.scheme=explicit-am"]
     extra += ["--set", "fluid.driver=persistent", "--set", "time.steps_per_period=40"]
+    extra += ["--set", "output.flow_every=2"]  # postProcess beside the paused solver
     done = subprocess.run(
         fsi_run(ROOT / "cases" / "fixed_head_3Hz", out, *extra),
         capture_output=True,
@@ -96,6 +129,7 @@ def test_persistent_driver_runs_one_solve_per_window(world_searchable):
     summary = json.loads(done.stdout)
     assert summary["mean_fluid_solves_per_window"] == 1.0
     assert np.isfinite(summary["mean_thrust_n"])
+    assert_flow_slices(out, [2, 4], np.array(summary["tip_displacement_m"]))
 
 
 def test_one_solve_per_window_is_stable_and_follows_the_implicit_run(world_searchable):

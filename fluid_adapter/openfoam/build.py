@@ -20,6 +20,7 @@ from .foamrun import FoamRun
 from .interface import read_interface
 from .motion import write_diffusivity
 from .participant import OpenFoamParticipant
+from .slices import fish_planes
 from .tankcase import flow_settings, generate_tank_case
 
 FINGERPRINT = "fishfsi-case.json"
@@ -98,6 +99,8 @@ def build_openfoam_participant(
         chosen: RelaunchDriver | PersistentDriver = PersistentDriver(run, dt, n_windows)
     else:
         chosen = RelaunchDriver(run, dt)
-    participant = OpenFoamParticipant(run, chosen, dt=dt, n_windows=n_windows)
+    participant = OpenFoamParticipant(
+        run, chosen, dt=dt, n_windows=n_windows, flow_planes=fish_planes(interface.points0)
+    )
     participant.mesh_quality = quality
     return participant

@@ -506,6 +506,13 @@ class Output:
     vtk: bool = param(True, "Write VTU/PVD series of the shell.")
     vtk_every: int = param(1, "Write VTU every n windows.", ge=1)
     checkpoint_every: int = param(10, "Write a restart checkpoint every n windows.", ge=1)
+    flow_every: int = param(
+        10,
+        "OpenFOAM: write flow slices (p, U, vorticity; vtk/flow_midheight.pvd, a horizontal "
+        "plane through the plate's centre height, and vtk/flow_wake.pvd, across the tank 20 mm "
+        "behind the tail) every n windows; 0: none.",
+        ge=0,
+    )
 
 
 SECTIONS: dict[str, type] = {

@@ -93,6 +93,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         vtk=case.output.vtk,
         vtk_every=case.output.vtk_every,
         checkpoint_every=case.output.checkpoint_every,
+        flow_every=case.output.flow_every,
         attributes={"case": str(case.directory), "dt_s": schedule.dt},
     )
     start = time.perf_counter()
