@@ -6,6 +6,9 @@ tail (seed Sec. 3.4.3), 40 windows per period, solved window by window by the pe
 window). Printed: cells, seconds per window, the persistent driver's Python share (writing the
 plate velocity samples, reading and integrating the loads, deleting stale folders), and the
 relaunch overhead. Target (issue 4): adapter share <= 5 % for the persistent driver.
+One fluid step per window (``fluid.max_courant = 10``, as the main job): the persistent driver
+never sub-steps, and with the default Courant limit of 2 the relaunched windows did, which
+counted their second step as "relaunch overhead" (1.56 s of it at the default level, stop 18).
 With ``--processes 1 4 16`` each level is also run on MPI ranks: speed-up over serial and the
 last window's lateral force against serial's (docs/openfoam.md, "Parallel scaling").
 
@@ -39,6 +42,7 @@ def time_driver(level: str, driver: str, windows: int, root: Path, processes: in
                 "mesh_level": level,
                 "driver": driver,
                 "processes": processes,
+                "max_courant": 10.0,
             },
             "coupling": {"scheme": "explicit-am"},  # one solve per window, as here
         },

@@ -119,6 +119,19 @@ def test_scalar_field_lists_of_any_length_stay_scalar_lists(tmp_path, n):
         np.testing.assert_array_equal(f["boundaryField"]["fishPlusZ"]["value"], values)
 
 
+def test_a_dictionary_updated_every_window_does_not_grow(tmp_path):
+    """foamlib 1.7.10 left blank lines behind on each update: a 4-period coupled run's
+    controlDict had 9,139 of them."""
+    path = tmp_path / "controlDict"
+    write_dict(path, {"startTime": 0.0, "endTime": 1.0, "functions": {"f": {"type": "x"}}})
+    size = len(path.read_text())
+    for k in range(200):
+        update_dict(path, {"startTime": float(k), "endTime": float(k + 1)})
+    assert len(path.read_text()) < size + 20
+    with FoamFile(path) as f:
+        assert f["startTime"] == 199.0 and f["functions"]["f"]["type"] == "x"
+
+
 @pytest.mark.openfoam
 @needs_openfoam
 @pytest.mark.parametrize("driver", [FluidDriver.RELAUNCH, FluidDriver.PERSISTENT])

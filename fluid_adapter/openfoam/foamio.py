@@ -50,8 +50,18 @@ def _scalar_lists(text: str) -> str:
 
 
 def update_dict(path: Path, entries: Mapping[str, Any]) -> None:
+    """Change ``entries`` in place. foamlib (1.7.10) leaves a few blank lines behind the header
+    on each update: a coupled run's controlDict grew to 9,000 lines over 4 periods, re-parsed
+    by every update and launch; runs of blank lines are collapsed here."""
     with FoamFile(path) as f:
         f.update(entries)
+    text = path.read_text()
+    compact = _BLANK_RUNS.sub("\n\n", text)
+    if compact != text:
+        path.write_text(compact)
+
+
+_BLANK_RUNS = re.compile(r"\n(?:[ \t]*\n){2,}")
 
 
 def read_points(path: Path) -> NDArray[np.float64]:
