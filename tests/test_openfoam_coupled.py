@@ -111,6 +111,11 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     # of the size of the fast added mass (~0.1-1 N), not noise
     assert 0.05 < np.abs(force[:, 2]).max() < 10
     assert_flow_slices(out, [2, 4], np.array(summary["tip_displacement_m"]))
+    # fsi-post draws the run and its last flow slice
+    post = [sys.executable, "-m", "fsi_orchestrator.cli.post", str(out)]
+    done = subprocess.run(post, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == [str(out / "run.png"), str(out / "flow.png")]
 
 
 def test_persistent_driver_runs_one_solve_per_window(world_searchable):

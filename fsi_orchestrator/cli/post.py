@@ -3,7 +3,8 @@
 - a sweep (``sweep.csv`` or a folder holding it): tail amplitude and mean thrust versus driving
   frequency, one curve per waveform (the seed's Figs. 3.25, 3.28);
 - a run (``results.h5`` or its folder): tail-tip displacement, fluid force / thrust and coupling
-  iterations versus time.
+  iterations versus time; with OpenFOAM's flow slices (``vtk/flow_midheight.pvd``) also the
+  last one's vorticity and pressure around the fish (``flow.png``).
 
 Writes PNG files next to the input (or to ``--output``) and prints their paths.
 """
@@ -87,6 +88,46 @@ def plot_run(h5_path: Path, output: Path) -> Path:
     return target
 
 
+def plot_flow(pvd: Path, output: Path) -> Path | None:
+    """The last mid-height slice: vertical vorticity (the wake's vortices in plan view) and
+    kinematic pressure, in the plate's neighbourhood."""
+    import xml.etree.ElementTree as ET
+
+    import matplotlib.tri as mtri
+    import pyvista as pv
+
+    entries = [
+        (float(d.get("timestep", "0")), d.get("file", "")) for d in ET.parse(pvd).iter("DataSet")
+    ]
+    if not entries:
+        return None
+    time_s, name = entries[-1]
+    mesh = pv.read(pvd.parent / name).triangulate()
+    xz = np.asarray(mesh.points)[:, [0, 2]]
+    triangles = mesh.faces.reshape(-1, 4)[:, 1:]
+    grid = mtri.Triangulation(xz[:, 0], xz[:, 1], triangles)
+    near = (xz[:, 0] > -0.03) & (xz[:, 0] < 0.32)
+    fields = (
+        ("vorticity", mesh.point_data["vorticity"][:, 1], "vertical vorticity [1/s]", "RdBu_r"),
+        ("p", mesh.point_data["p"], "p / rho [m2/s2]", "coolwarm"),
+    )
+    fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    for ax, (_, values, label, cmap) in zip(axes, fields, strict=True):
+        limit = float(np.percentile(np.abs(values[near]), 99)) or 1.0
+        shown = ax.tripcolor(grid, values, cmap=cmap, vmin=-limit, vmax=limit, shading="gouraud")
+        fig.colorbar(shown, ax=ax, label=label)
+        ax.set_xlim(-0.03, 0.32)
+        ax.set_aspect("equal")
+        ax.set_ylabel("z [m]")
+    axes[0].set_title(f"mid-height slice at t = {time_s:.4g} s ({name})")
+    axes[-1].set_xlabel("x [m] (nose at 0)")
+    fig.tight_layout()
+    target = output / "flow.png"
+    fig.savefig(target, dpi=120)
+    plt.close(fig)
+    return target
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="fsi-post", description=__doc__.splitlines()[0])
     parser.add_argument("path", help="sweep.csv, results.h5 or a folder holding one")
@@ -104,8 +145,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     output = Path(args.output) if args.output else found.parent
     output.mkdir(parents=True, exist_ok=True)
-    target = plot_sweep(found, output) if found.suffix == ".csv" else plot_run(found, output)
-    print(target)
+    if found.suffix == ".csv":
+        print(plot_sweep(found, output))
+        return EXIT_OK
+    print(plot_run(found, output))
+    slices = found.parent / "vtk" / "flow_midheight.pvd"
+    flow = plot_flow(slices, output) if slices.is_file() else None
+    if flow is not None:
+        print(flow)
     return EXIT_OK
 
 
