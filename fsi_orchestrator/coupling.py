@@ -254,7 +254,19 @@ class Coupling:
         self, motion, times: list[float], dt: float, record_from: float | None = None
     ) -> LeadInSamples | None:
         """The fluid alone through a prescribed interface motion u(t) (solid nodes); the
-        velocity and acceleration it is also given are central differences of u."""
+        velocity and acceleration it is also given are central differences of u. A fluid
+        that can run prescribed windows in one go (optional ``follow(displacements, dt)``,
+        OpenFOAM's batch launch) is given them all at once."""
+        follow = getattr(self.fluid, "follow", None)
+        if follow is not None:
+            forces = follow([self.mapping.consistent(motion(t)) for t in times], dt)
+            rows = [
+                (t, motion(t)[:, 2], _velocity(motion, t, dt)[:, 2])
+                + (_acceleration(motion, t, dt)[:, 2], self.mapping.conservative(f)[:, 2])
+                for t, f in zip(times, forces, strict=True)
+                if record_from is not None and t >= record_from - 1e-9 * dt
+            ]
+            return self._samples(rows) if record_from is not None else None
         rows = []
         for t in times:
             u = motion(t)
@@ -270,8 +282,10 @@ class Coupling:
             if record_from is not None and t >= record_from - 1e-9 * dt:
                 f = self.mapping.conservative(self.fluid.write_data()[FORCE])
                 rows.append((t, u[:, 2], v[:, 2], a[:, 2], f[:, 2]))
-        if record_from is None:
-            return None
+        return self._samples(rows) if record_from is not None else None
+
+    @staticmethod
+    def _samples(rows: list[tuple]) -> LeadInSamples:
         t, u, v, a, f = (np.array(c) for c in zip(*rows, strict=True))
         return LeadInSamples(t, u, v, a, f)
 

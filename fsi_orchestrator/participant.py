@@ -8,8 +8,12 @@ A window goes ``read_data -> solve(dt) -> write_data``. Implicit coupling stores
 the start of the window and restores it before solving the window again with new data.
 
 Optional members, looked up with getattr: ``initialize_data(data)`` (the exchanged values at the
-initial time) and, on a fluid, ``acceleration_stencil`` (how it differentiates the window-end
-displacements it is given: a = sum_j c_j u_(n+1-j) / dt^2), which the added-mass schemes use.
+initial time), ``monitor()`` (scalars and small arrays for results.h5), ``flow_fields()`` (files
+such as flow slices for the PVD series: {series name: path}) and, on a fluid,
+``acceleration_stencil`` (how it differentiates the window-end displacements it is given:
+a = sum_j c_j u_(n+1-j) / dt^2), which the added-mass schemes use, and
+``follow(displacements, dt)`` (prescribed windows in one go, returning each one's nodal
+forces: the lead-in).
 """
 
 from __future__ import annotations

@@ -60,9 +60,7 @@ class Clock:
 
 def run(tmp_path: Path, n_windows: int, fail: bool = False, resume: bool = False) -> Clock:
     solid = Clock(tmp_path / "scratch", fail)
-    output = OutputSettings(
-        directory=tmp_path / "out", vtk=False, flow_every=3, checkpoint_every=3
-    )
+    output = OutputSettings(directory=tmp_path / "out", vtk=False, flow_every=3, checkpoint_every=3)
     WindowLoop(solid, Schedule(dt=0.5, n_windows=n_windows), output).run(resume=resume)
     return solid
 

@@ -164,3 +164,21 @@ def test_saved_state_resumes_a_killed_run(setup, relaunch_history):
     assert fresh.time == pytest.approx(4 * DT)
     resumed = drive(fresh, motion, [5, 6])
     assert relative(resumed, relaunch_history[0][4:6]) < 1e-6
+
+
+def test_prescribed_windows_in_one_launch_continue_as_relaunched_windows(setup, relaunch_history):
+    """The coupling's lead-in hands the fluid its prescribed windows at once (``follow``): one
+    pimpleFoam launch instead of one per window. Its forces are the relaunched ones (as a
+    continuous run's: 1e-3), and the relaunch driver goes on from where it stopped."""
+    p = participant(setup, "follow", FluidDriver.RELAUNCH)
+    motion = setup[2]
+    half = N // 2
+    nodal = p.follow([motion.displacement(k * DT) for k in range(1, half + 1)], DT)
+    assert p.time == pytest.approx(half * DT, rel=1e-12)
+    totals = np.array([f.sum(axis=0) for f in nodal])
+    np.testing.assert_allclose(totals[-1], p.monitor()["force_n"], rtol=1e-9, atol=1e-12)
+    later = drive(p, motion, range(half + 1, N + 1))
+    p.finalize()
+    forces, _, last_folder = relaunch_history
+    assert relative(np.vstack([totals, later]), forces) < 1e-3
+    assert [name for _, name in numeric_dirs(p.run.path)] == ["0", last_folder]
