@@ -253,41 +253,37 @@ class Coupling:
     def _follow(
         self, motion, times: list[float], dt: float, record_from: float | None = None
     ) -> LeadInSamples | None:
-        """The fluid alone through a prescribed interface motion u(t) (solid nodes); the
-        velocity and acceleration it is also given are central differences of u. A fluid
-        that can run prescribed windows in one go (optional ``follow(displacements, dt)``,
-        OpenFOAM's batch launch) is given them all at once."""
+        """The fluid alone through a prescribed interface motion u(t) (solid nodes), window by
+        window, or all at once by a fluid that can (optional ``follow(displacements, dt)``:
+        OpenFOAM runs them in one launch). Samples from ``record_from`` on."""
         follow = getattr(self.fluid, "follow", None)
         if follow is not None:
             forces = follow([self.mapping.consistent(motion(t)) for t in times], dt)
-            rows = [
-                (t, motion(t)[:, 2], _velocity(motion, t, dt)[:, 2])
-                + (_acceleration(motion, t, dt)[:, 2], self.mapping.conservative(f)[:, 2])
-                for t, f in zip(times, forces, strict=True)
-                if record_from is not None and t >= record_from - 1e-9 * dt
-            ]
-            return self._samples(rows) if record_from is not None else None
-        rows = []
-        for t in times:
-            u = motion(t)
-            v, a = _velocity(motion, t, dt), _acceleration(motion, t, dt)
-            self.fluid.read_data(
-                {
-                    DISPLACEMENT: self.mapping.consistent(u),
-                    VELOCITY: self.mapping.consistent(v),
-                    ACCELERATION: self.mapping.consistent(a),
-                }
-            )
-            self.fluid.solve(dt)
-            if record_from is not None and t >= record_from - 1e-9 * dt:
-                f = self.mapping.conservative(self.fluid.write_data()[FORCE])
-                rows.append((t, u[:, 2], v[:, 2], a[:, 2], f[:, 2]))
-        return self._samples(rows) if record_from is not None else None
-
-    @staticmethod
-    def _samples(rows: list[tuple]) -> LeadInSamples:
+        else:
+            forces = [self._prescribed_window(motion, t, dt) for t in times]
+        if record_from is None:
+            return None
+        rows = [
+            (t, motion(t)[:, 2], _velocity(motion, t, dt)[:, 2])
+            + (_acceleration(motion, t, dt)[:, 2], self.mapping.conservative(f)[:, 2])
+            for t, f in zip(times, forces, strict=True)
+            if t >= record_from - 1e-9 * dt
+        ]
         t, u, v, a, f = (np.array(c) for c in zip(*rows, strict=True))
         return LeadInSamples(t, u, v, a, f)
+
+    def _prescribed_window(self, motion, t: float, dt: float) -> NDArray:
+        """One fluid window ending at t on the motion (velocity and acceleration: central
+        differences of u); the fluid's nodal force."""
+        self.fluid.read_data(
+            {
+                DISPLACEMENT: self.mapping.consistent(motion(t)),
+                VELOCITY: self.mapping.consistent(_velocity(motion, t, dt)),
+                ACCELERATION: self.mapping.consistent(_acceleration(motion, t, dt)),
+            }
+        )
+        self.fluid.solve(dt)
+        return self.fluid.write_data()[FORCE]
 
     # ------------------------------------------------------------------ one window
     def solve_window(self, solid: Participant, dt: float, window: int) -> dict[str, float]:
