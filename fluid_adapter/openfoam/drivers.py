@@ -67,7 +67,16 @@ class RelaunchDriver:
         runner.run(run.command())
         loads = run.loads(self.time, t1, self.displacement, displacement)
         self.time, self.displacement, self.dt = t1, displacement.copy(), dt
-        self.prune()
+        self._prune()
+        return loads
+
+    def advance_prescribed(self, displacements: list[NDArray], dt: float) -> list[SurfaceLoads]:
+        """Several windows whose displacements are known in advance, in one launch
+        (``run_batch``; only the last time folder is written): each window's loads."""
+        t0, path, n = self.time, [self.displacement, *displacements], len(displacements)
+        loads = run_batch(self.run, lambda t: path[round((t - t0) / dt)], dt, n, t0)
+        self.time, self.displacement, self.dt = t0 + n * dt, path[-1].copy(), dt
+        self._prune()
         return loads
 
     def _kept_times(self) -> list[float]:
@@ -76,7 +85,7 @@ class RelaunchDriver:
         kept += [self.saved] if self.saved is not None else []
         return kept
 
-    def prune(self) -> None:
+    def _prune(self) -> None:
         names = {"0"} | {_start_folder(self.run, t, self.dt) for t in self._kept_times()}
         self.run.remove_times(names)
         self.run.remove_samples(self.dt, before=min(self._kept_times()))
@@ -177,7 +186,7 @@ class PersistentDriver:
         loads = self.run.loads(self.time, self._window_end(k), self.displacement, displacement)
         self.step, self.time = k, self._window_end(k)
         self.displacement = displacement.copy()
-        self.prune()
+        self._prune()
         self.timing["solver_s"] += done - waited
         self.timing["adapter_s"] += (waited - start) + (time.perf_counter() - done)
         return loads
@@ -199,7 +208,7 @@ class PersistentDriver:
                 raise DriverError(f"pimpleFoam in {self.run.path} ended before the window end")
         runner.check_log(self.run.command())
 
-    def prune(self) -> None:
+    def _prune(self) -> None:
         keep = [self.time] + ([self.saved] if self.saved is not None else [])
         names = {"0"} | {self.run.time_folder(t, self.dt) for t in keep}
         self.run.remove_times(names)

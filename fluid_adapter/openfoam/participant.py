@@ -20,7 +20,7 @@ from fsi_orchestrator.case.schema import TimeScheme
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, State
 
 from .checkmesh import MeshQuality
-from .drivers import PersistentDriver, RelaunchDriver, run_batch
+from .drivers import PersistentDriver, RelaunchDriver
 from .errors import DriverError
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
@@ -105,16 +105,9 @@ class OpenFoamParticipant:
                 self.solve(dt)
                 forces.append(self.write_data()[FORCE])
             return forces
-        driver, t0 = self.driver, self.driver.time
-        path = [driver.displacement, *(np.asarray(u, dtype=float) for u in displacements)]
-
-        def at(t: float) -> NDArray:
-            return path[round((t - t0) / dt)]
-
-        loads = run_batch(self.run, at, dt, len(displacements), t0=t0)
-        driver.time, driver.displacement, driver.dt = t0 + len(displacements) * dt, path[-1], dt
-        driver.prune()
-        self._displacement, self._loads = path[-1].copy(), loads[-1]
+        given = [np.asarray(u, dtype=float) for u in displacements]
+        loads = self.driver.advance_prescribed(given, dt)
+        self._displacement, self._loads = given[-1].copy(), loads[-1]
         return [self.run.interface.nodal_forces(window.face_forces) for window in loads]
 
     def write_data(self) -> dict[str, NDArray]:
