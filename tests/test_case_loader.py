@@ -157,9 +157,9 @@ def test_case_format_doc_is_generated_from_the_schema():
     )
 
 
-def test_persistent_driver_refuses_an_implicit_scheme(tmp_path):
+def test_persistent_driver_takes_an_implicit_scheme(tmp_path):
+    # it repeats a window by going on with a process started from the checkpoint (drivers.py)
     (tmp_path / "case.toml").write_text(
         '[fluid]\nmodel = "openfoam"\ndriver = "persistent"\n[coupling]\nscheme = "iqn-ils"\n'
     )
-    with pytest.raises(CaseError, match='fluid.driver = "persistent".*"relaunch"'):
-        load_case(tmp_path)
+    assert load_case(tmp_path).fluid.driver.value == "persistent"

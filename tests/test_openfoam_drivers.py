@@ -2,20 +2,24 @@
 checkpoints, resume.
 
 Exact-behaviour references: a continuous pimpleFoam run of N windows (one launch) for the
-relaunch driver's N one-window launches (issue 4: same force to 1e-3 relative), and the relaunch
-driver for the persistent one (same force history to 1e-3).
+relaunch driver's N one-window launches (issue 4: same force to 1e-3 relative), the relaunch
+driver for the persistent one (same force history to 1e-3), and the straight history for
+windows solved three times (implicit coupling: persistent and relaunch, with and without
+prelaunch, to 1e-9).
 """
 
 from __future__ import annotations
 
+import os
 import shutil
+import subprocess
 import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam import DriverError, build_openfoam_participant
+from fluid_adapter.openfoam import build_openfoam_participant, runner
 from fluid_adapter.openfoam.build import prepare_case
 from fluid_adapter.openfoam.drivers import run_batch
 from fluid_adapter.openfoam.fishmesh import FISH_PATCHES
@@ -115,15 +119,50 @@ def test_persistent_driver_gives_the_relaunch_history(setup, relaunch_history):
     assert relative(forces, relaunch_history[0]) < 1e-3
 
 
-def test_persistent_driver_cannot_go_back_in_time(setup):
-    p = participant(setup, "persistent_restore", FluidDriver.PERSISTENT)
-    try:
+def solve_each_window_three_times(p, motion, windows):
+    """Implicit coupling's pattern: two wrong iterates, each restored, then the right one."""
+    forces = []
+    for k in windows:
         p.store_checkpoint()
-        drive(p, setup[2], [1])
-        with pytest.raises(DriverError, match="relaunch"):
+        for wrong in (1.3, 0.8):
+            p.read_data({DISPLACEMENT: wrong * motion.displacement(k * DT)})
+            p.solve(DT)
             p.restore_checkpoint()
+        forces.append(drive(p, motion, [k])[0])
+    return np.array(forces)
+
+
+@pytest.mark.parametrize("kind", [FluidDriver.PERSISTENT, FluidDriver.RELAUNCH])
+@pytest.mark.parametrize("prelaunch", [False, True])
+def test_repeated_windows_give_the_straight_history(setup, relaunch_history, kind, prelaunch):
+    """Restoring goes back to the checkpoint's folder: the persistent driver ends its process
+    and goes on with one started there; with prelaunch that process (relaunch: the next
+    launch) was started during the solve and waited at its start-up gate."""
+    p = participant(setup, f"repeat_{kind.value}_{prelaunch}", kind)
+    p.driver.prelaunch = prelaunch
+    if prelaunch:
+        runner.write_start_up_gate(p.run.path)
+    try:
+        forces = solve_each_window_three_times(p, setup[2], range(1, N + 1))
+        launches = p.driver.launches
     finally:
         p.finalize()
+    assert relative(forces, relaunch_history[0]) < 1e-9
+    if kind is FluidDriver.PERSISTENT:
+        # a new process for each repeat; the last one goes on into the next window
+        assert launches == (1 + 3 * N if prelaunch else 1 + 2 * N)
+    else:
+        assert launches == (4 * N if prelaunch else 3 * N)
+    assert not list(p.run.path.glob("*.fifo.*"))
+    assert not _solvers_left()
+
+
+def _solvers_left() -> str:
+    """pimpleFoam processes this test process started and did not end (pgrep's output)."""
+    found = subprocess.run(
+        ["pgrep", "-P", str(os.getpid()), "-x", "pimpleFoam"], capture_output=True, text=True
+    )
+    return found.stdout.strip()
 
 
 def test_restored_window_solves_again_as_if_first_time(setup, relaunch_history):

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from dataclasses import asdict
 from pathlib import Path
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.case.schema import IMPLICIT_SCHEMES, FluidDriver
 from fsi_orchestrator.case.timing import case_schedule
 
 from . import runner
@@ -96,11 +97,20 @@ def build_openfoam_participant(
         run.init_samples()
     kind = driver or case.fluid.driver
     if kind is FluidDriver.PERSISTENT:
-        chosen: RelaunchDriver | PersistentDriver = PersistentDriver(run, dt, n_windows)
+        chosen: RelaunchDriver | PersistentDriver = PersistentDriver(
+            run, dt, n_windows, prelaunch=_prelaunch(case, processes)
+        )
     else:
-        chosen = RelaunchDriver(run, dt)
+        chosen = RelaunchDriver(run, dt, prelaunch=_prelaunch(case, processes))
     participant = OpenFoamParticipant(
         run, chosen, dt=dt, n_windows=n_windows, flow_planes=fish_planes(interface.points0)
     )
     participant.mesh_quality = quality
     return participant
+
+
+def _prelaunch(case: Case, processes: int) -> bool:
+    """Start the process a repeated window needs while the window is solved (drivers.py): only
+    where windows are repeated (implicit coupling), serial, with a second core for its start-up."""
+    repeats = case.coupling.scheme.value in IMPLICIT_SCHEMES
+    return repeats and processes == 1 and (os.cpu_count() or 1) >= 2

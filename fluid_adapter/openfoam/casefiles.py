@@ -105,16 +105,17 @@ def window_functions(s: FlowSettings, dt: float) -> dict:
     }
 
 
-def handshake_function(command: str, dt: float) -> dict:
-    """``systemCall`` at every window end (blocks until ``command`` returns)."""
+def handshake_function(command: str) -> dict:
+    """``systemCall`` after every fluid step (blocks until ``command`` returns); not at
+    start-up (v1912's functionObjectList::start() only reads)."""
     return {
         "type": "systemCall",
         "libs": ["utilityFunctionObjects"],
         "executeCalls": [command],
         "writeCalls": [],
         "endCalls": [],
-        "executeControl": "adjustableRunTime",
-        "executeInterval": dt,
+        "executeControl": "timeStep",
+        "executeInterval": 1,
     }
 
 

@@ -176,9 +176,10 @@ class FoamRun:
             self.settings, start=float(start), end=end, dt=dt, write_every=write_every
         )
         if handshake is not None:
-            controls["functions"][HANDSHAKE_FO] = handshake_function(handshake, dt)
-            # one fluid step per window: systemCall's adjustableRunTime control fires at
-            # Courant sub-steps too (measured), so the handshake would not mark window ends
+            controls["functions"][HANDSHAKE_FO] = handshake_function(handshake)
+            # one fluid step per window, so that the handshake after every step marks the
+            # window ends (systemCall's adjustableRunTime control fired at Courant sub-steps
+            # too, measured)
             controls["adjustTimeStep"] = False
         self.set_controls(**controls)
 

@@ -4,8 +4,8 @@ Interface: the fish patches' points (both faces of the plate share them) and the
 plate face appears twice, once per side). Reads point displacements (from the reference
 configuration, interface point order); writes nodal forces (each face force split equally among
 its points, so they sum to the total force), plus the face forces, face centres and face
-pressures they came from. Checkpoints are time folders (relaunch driver); the persistent driver
-cannot go back in time and says so.
+pressures they came from. Checkpoints are time folders; going back to one ends a persistent
+driver's process and goes on with one started there (drivers.py).
 """
 
 from __future__ import annotations
@@ -93,18 +93,10 @@ class OpenFoamParticipant:
     def follow(self, displacements: Sequence[NDArray], dt: float) -> list[NDArray]:
         """Prescribed motion (optional in the protocol; the coupling's lead-in): the next
         windows with these window-end displacements, one after the other; returns each
-        window's nodal forces. With the relaunch driver one pimpleFoam launch runs them all
-        (batch), saving a start-up per window (0.6 s at the default level); the persistent
-        driver steps through them."""
+        window's nodal forces. One pimpleFoam launch runs them all (batch, no handshakes),
+        saving a start-up per window (0.6 s at the default level) with the relaunch driver."""
         if not displacements:
             return []
-        if not isinstance(self.driver, RelaunchDriver):
-            forces = []
-            for u in displacements:
-                self.read_data({DISPLACEMENT: u})
-                self.solve(dt)
-                forces.append(self.write_data()[FORCE])
-            return forces
         given = [np.asarray(u, dtype=float) for u in displacements]
         loads = self.driver.advance_prescribed(given, dt)
         self._displacement, self._loads = given[-1].copy(), loads[-1]
@@ -192,7 +184,14 @@ class OpenFoamParticipant:
         self.run.remove_samples(self.dt, after=t)
         if isinstance(self.driver, PersistentDriver):
             done = round(t / self.dt)
-            return PersistentDriver(self.run, self.dt, self.n_windows - done, t0=t, u0=u)
-        driver = RelaunchDriver(self.run, self.dt, t0=t, u0=u)
+            return PersistentDriver(
+                self.run,
+                self.dt,
+                self.n_windows - done,
+                t0=t,
+                u0=u,
+                prelaunch=self.driver.prelaunch,
+            )
+        driver = RelaunchDriver(self.run, self.dt, t0=t, u0=u, prelaunch=self.driver.prelaunch)
         driver.saved = t
         return driver

@@ -11,12 +11,14 @@ the last lines of the log.
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import re
 import shutil
 import stat
 import subprocess
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +32,7 @@ SCANNED_LINES = 120  # a running solver's window (one step: ~40 lines) checked f
 # Residuals are normalised: anything far above 1 (or a NaN) means the solution has blown up.
 RESIDUAL_LIMIT = 1e3
 COURANT_LIMIT = 1e3
+GATE_VARIABLE = "FISHFSI_GATE"
 
 
 def project_dir() -> Path:
@@ -79,9 +82,12 @@ def give_to_nobody(path: Path) -> None:
                 f"world-searchable directory such as /tmp, or run as a non-root user"
             )
     for root, dirs, files in os.walk(path):
-        os.chown(root, NOBODY_UID, NOBODY_UID)
-        for name in dirs + files:
-            os.chown(os.path.join(root, name), NOBODY_UID, NOBODY_UID, follow_symlinks=False)
+        # a running solver may add (and the driver remove) entries meanwhile
+        for entry in [root] + [os.path.join(root, name) for name in dirs + files]:
+            try:
+                os.chown(entry, NOBODY_UID, NOBODY_UID, follow_symlinks=False)
+            except FileNotFoundError:
+                continue
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -94,6 +100,8 @@ class Command:
     processes: int = 1
     unprivileged: bool = False  # drop root (needed for systemCall)
     log_name: str | None = None
+    gate: Path | None = None  # a FIFO the start-up waits at (write_start_up_gate)
+    handshake: tuple[Path, Path] | None = None  # the ready and go pipes (persistent driver)
 
     @property
     def log(self) -> Path:
@@ -115,7 +123,51 @@ class Command:
         return cmd
 
     def env(self) -> dict[str, str]:
-        return foam_env(self.cwd, parallel=self.processes > 1)
+        env = foam_env(self.cwd, parallel=self.processes > 1)
+        if self.gate is not None:
+            env[GATE_VARIABLE] = str(self.gate)
+        if self.handshake is not None:  # per process: all share one controlDict
+            env["FISHFSI_READY"], env["FISHFSI_GO"] = map(str, self.handshake)
+        return env
+
+
+def write_start_up_gate(case: Path) -> None:
+    """A hook late in a solver's start-up: ``constant/fvOptions`` (read after the mesh, the
+    fields and the turbulence model are loaded; this case has no options) includes the file
+    named by $FISHFSI_GATE if present. A launch whose gate is a FIFO blocks there, loaded,
+    until :func:`open_gate` writes to it; any other launch reads nothing."""
+    header = "FoamFile { version 2.0; format ascii; class dictionary; object fvOptions; }"
+    (case / "constant" / "fvOptions").write_text(
+        f'{header}\n#includeIfPresent "${GATE_VARIABLE}"\n'
+    )
+
+
+def open_gate(command: Command, proc: subprocess.Popen) -> None:
+    """Let a launch waiting at its start-up gate go on (waits until it reaches the gate)."""
+    assert command.gate is not None
+    while True:
+        try:  # a FIFO opens for writing only once its reader is there
+            fd = os.open(command.gate, os.O_WRONLY | os.O_NONBLOCK)
+            break
+        except OSError as err:
+            if err.errno != errno.ENXIO:
+                raise
+        if proc.poll() is not None:
+            check_finished(command, proc.returncode or 1)
+            raise OpenFoamRunError(
+                f"{command.app} in {command.case} ended before its start-up gate; see {command.log}"
+            )
+        time.sleep(0.002)
+    try:
+        os.write(fd, b"// go\n")
+    finally:
+        os.close(fd)  # the reader sees end-of-file: the include is complete
+
+
+def wait_finished(command: Command, proc: subprocess.Popen) -> Path:
+    """Wait for a launch to end; raise as :func:`run` does."""
+    check_finished(command, proc.wait())
+    return command.log
 
 
 def run(command: Command, timeout_s: float | None = None) -> Path:

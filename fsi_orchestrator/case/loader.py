@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .params import CaseError, build_section
-from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, FluidDriver, FluidModel, GeometryKind
+from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, GeometryKind
 
 CASE_FILE = "case.toml"
 
@@ -131,14 +131,7 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
     t = case.time
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")
-    f, c = case.fluid, case.coupling
-    implicit = c.scheme.value in {"constant", "aitken", "iqn-ils", "iqn-ils-am"}
-    if f.model is FluidModel.OPENFOAM and f.driver is FluidDriver.PERSISTENT and implicit:
-        raise CaseError(
-            f'fluid.driver = "persistent" cannot repeat a window, which coupling.scheme = '
-            f'"{c.scheme.value}" needs: use fluid.driver = "relaunch", or a one-solve-per-window '
-            'scheme ("explicit-am")'
-        )
+    c = case.coupling
     if c.explicit_periods > 0:
         if c.scheme.value != "iqn-ils-am":
             raise CaseError(

@@ -97,7 +97,9 @@ class TimeScheme(StrEnum):
 
 
 class FluidDriver(StrEnum):
-    PERSISTENT = "persistent"  # one pimpleFoam process, one solve per window
+    # pimpleFoam stays loaded between windows (one fluid step per window); a repeated window
+    # restarts it from the checkpoint, started ahead on a free core
+    PERSISTENT = "persistent"
     RELAUNCH = "relaunch"  # each solve restarts from the last converged time folder
 
 
@@ -120,6 +122,10 @@ class CouplingScheme(StrEnum):
     IQN_ILS = "iqn-ils"
     IQN_ILS_AM = "iqn-ils-am"
     EXPLICIT_AM = "explicit-am"
+
+
+# schemes that solve a window again until it converges
+IMPLICIT_SCHEMES = frozenset({"constant", "aitken", "iqn-ils", "iqn-ils-am"})
 
 
 @dataclass(frozen=True, kw_only=True)

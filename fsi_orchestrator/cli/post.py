@@ -107,12 +107,12 @@ def plot_flow(pvd: Path, output: Path) -> Path | None:
     triangles = mesh.faces.reshape(-1, 4)[:, 1:]
     grid = mtri.Triangulation(xz[:, 0], xz[:, 1], triangles)
     near = (xz[:, 0] > -0.03) & (xz[:, 0] < 0.32)
-    fields = (
-        ("vorticity", mesh.point_data["vorticity"][:, 1], "vertical vorticity [1/s]", "RdBu_r"),
-        ("p", mesh.point_data["p"], "p / rho [m2/s2]", "coolwarm"),
+    fields = (  # (values, colour-bar label, colour map)
+        (mesh.point_data["vorticity"][:, 1], "vertical vorticity [1/s]", "RdBu_r"),
+        (mesh.point_data["p"], "p / rho [m2/s2]", "coolwarm"),
     )
     fig, axes = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
-    for ax, (_, values, label, cmap) in zip(axes, fields, strict=True):
+    for ax, (values, label, cmap) in zip(axes, fields, strict=True):
         limit = float(np.percentile(np.abs(values[near]), 99)) or 1.0
         shown = ax.tripcolor(grid, values, cmap=cmap, vmin=-limit, vmax=limit, shading="gouraud")
         fig.colorbar(shown, ax=ax, label=label)
