@@ -210,6 +210,7 @@ class RelaunchDriver:
             raise DriverError("restore_checkpoint called before store_checkpoint")
         t, u = self.checkpoint
         self.run.remove_times({"0"}, after=t + 1e-6 * self.dt)
+        self.run.remove_load_samples(set(), after=t + 1e-6 * self.dt)
         self.run.remove_samples(self.dt, after=t)
         self.time, self.displacement = t, u.copy()
 
@@ -380,6 +381,7 @@ class PersistentDriver:
         _end(self.live)  # it is past the checkpoint and cannot go back
         self.live = None
         self.run.remove_times({"0"}, after=t + 1e-6 * self.dt)
+        self.run.remove_load_samples(set(), after=t + 1e-6 * self.dt)
         self.time, self.step, self.displacement = t, step, u.copy()
 
     def close(self) -> None:

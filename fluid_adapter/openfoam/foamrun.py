@@ -221,11 +221,15 @@ class FoamRun:
             face_forces=sum(w * s.face_forces for w, s in zip(weights, samples, strict=True)),
         )
 
-    def remove_load_samples(self, keep_names: set[str]) -> None:
+    def remove_load_samples(self, keep_names: set[str], after: float | None = None) -> None:
+        """Delete the sampled loads except ``keep_names`` (or, given ``after``, only those
+        later than it: a repeated window's process may name the same time differently in its
+        last digit, and the stale folder must not be read)."""
         root = self.path / "postProcessing" / SAMPLE_FO
-        for _, name in numeric_dirs(root):
-            if name not in keep_names:
-                shutil.rmtree(root / name, ignore_errors=True)
+        for value, name in numeric_dirs(root):
+            if name in keep_names or (after is not None and value <= after):
+                continue
+            shutil.rmtree(root / name, ignore_errors=True)
 
 
 def _nearest(found: list[tuple[float, str]], t: float, dt: float, where: Path) -> str:
