@@ -172,12 +172,16 @@ def test_one_solve_per_window_is_stable_and_follows_the_implicit_run(world_searc
     assert np.abs(tip - tip_ref).max() < 0.15 * np.abs(tip_ref).max()
 
 
-def test_killed_coupled_run_resumes_to_the_same_result(world_searchable):
+@pytest.mark.parametrize("driver", ["relaunch", "persistent"])
+def test_killed_coupled_run_resumes_to_the_same_result(world_searchable, driver):
     """kill -9 after a checkpoint, --resume: the fluid restarts from its checkpoint time
-    folder, the structure and the quasi-Newton Jacobian from checkpoint.h5."""
+    folder, the structure and the quasi-Newton Jacobian from checkpoint.h5. No pimpleFoam
+    outlives the killed run (a prelaunched one waits at its gate, a persistent one in its
+    handshake: they die with their parent)."""
     env = {**os.environ, "PYTHONHASHSEED": "0"}
     case = ROOT / "cases" / "fixed_head_3Hz"
     extra = ["--set", "time.periods=0.3", "--set", "output.checkpoint_every=2"]
+    extra += ["--set", f"fluid.driver={driver}"]
     ref, killed = world_searchable / "ref", world_searchable / "killed"
     done = subprocess.run(fsi_run(case, ref, *extra), capture_output=True, text=True, env=env)
     assert done.returncode == 0, done.stderr[-3000:]
@@ -193,6 +197,14 @@ def test_killed_coupled_run_resumes_to_the_same_result(world_searchable):
         time.sleep(0.2)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
+    left = "running"
+    for _ in range(50):
+        found = subprocess.run(["pgrep", "-f", f"pimpleFoam -case {killed}"], capture_output=True)
+        left = found.stdout.decode().strip()
+        if not left:
+            break
+        time.sleep(0.1)
+    assert not left, f"pimpleFoam processes outlived the killed run: {left}"
     with h5py.File(killed / "results.h5", "r") as h5:
         written = h5["time_s"].shape[0]
     assert 0 < written < 6, "the run should have been killed mid-way"

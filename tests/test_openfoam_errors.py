@@ -32,7 +32,7 @@ DT = 1 / 120
 
 def small_participant(folder: Path, **fluid):
     sections = {"fluid": {"model": "openfoam", "mesh_level": "coarse", **fluid}}
-    if fluid.get("driver") == "persistent":  # cannot repeat windows: one solve per window
+    if fluid.get("driver") == "persistent":  # one solve per window: no prelaunched process
         sections["coupling"] = {"scheme": "explicit-am"}
     case = case_from_dict(sections, folder)
     return case, build_openfoam_participant(
@@ -48,6 +48,19 @@ def test_missing_openfoam_says_how_to_install(monkeypatch, tmp_path):
     monkeypatch.setenv("PATH", str(tmp_path))
     with pytest.raises(OpenFoamNotFoundError, match="`pimpleFoam` is not on PATH"):
         runner.executable("pimpleFoam")
+
+
+@needs_openfoam
+@pytest.mark.skipif(not runner.is_root(), reason="only root hands the solver to nobody")
+def test_persistent_driver_behind_a_closed_folder_says_so_and_relaunches(tmp_path):
+    # pytest's tmp_path lies under a 0700 folder: nobody cannot reach it
+    assert runner.unreachable_for_nobody(tmp_path) is not None
+    with pytest.warns(UserWarning, match=r"cannot pass .*relaunch driver.*--output"):
+        _, p = small_participant(tmp_path, driver="persistent")
+    assert not p.driver.persistent
+    p.read_data({DISPLACEMENT: np.zeros_like(p.run.interface.points0)})
+    p.solve(DT)  # runs
+    p.finalize()
 
 
 def test_divergence_is_recognised_in_a_log():

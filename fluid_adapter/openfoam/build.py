@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import warnings
 from dataclasses import asdict
 from pathlib import Path
 
@@ -96,6 +97,16 @@ def build_openfoam_participant(
     if fresh:
         run.init_samples()
     kind = driver or case.fluid.driver
+    blocked = runner.unreachable_for_nobody(workdir)
+    if kind is FluidDriver.PERSISTENT and blocked is not None and driver is None:
+        warnings.warn(
+            f"fluid.driver = \"persistent\" runs OpenFOAM as 'nobody' when root (systemCall "
+            f"is disabled for root), which cannot pass {blocked}: using the relaunch driver "
+            "(about 10 % slower with implicit coupling). Write the output under a "
+            "world-searchable folder such as /tmp (--output) to keep pimpleFoam loaded.",
+            stacklevel=2,
+        )
+        kind = FluidDriver.RELAUNCH
     if kind is FluidDriver.PERSISTENT:
         chosen: RelaunchDriver | PersistentDriver = PersistentDriver(
             run, dt, n_windows, prelaunch=_prelaunch(case, processes)

@@ -69,18 +69,28 @@ def foam_env(case: Path, parallel: bool = False) -> dict[str, str]:
     return env
 
 
+def unreachable_for_nobody(path: Path) -> Path | None:
+    """As root: the first parent of ``path`` that ``nobody`` cannot pass (None: all can)."""
+    if not is_root():
+        return None
+    for parent in path.resolve().parents:
+        if not parent.stat().st_mode & stat.S_IXOTH:
+            return parent
+    return None
+
+
 def give_to_nobody(path: Path) -> None:
     """Let an unprivileged OpenFOAM write in a case folder created by root."""
     if not is_root():
         return
-    for parent in path.resolve().parents:
-        if not parent.stat().st_mode & stat.S_IXOTH:
-            raise OpenFoamRunError(
-                f"the persistent driver runs OpenFOAM as 'nobody' (systemCall is disabled for "
-                f"root), but {parent} is not searchable by others "
-                f"(mode {stat.filemode(parent.stat().st_mode)}): put the work folder under a "
-                f"world-searchable directory such as /tmp, or run as a non-root user"
-            )
+    parent = unreachable_for_nobody(path)
+    if parent is not None:
+        raise OpenFoamRunError(
+            f"the persistent driver runs OpenFOAM as 'nobody' (systemCall is disabled for "
+            f"root), but {parent} is not searchable by others "
+            f"(mode {stat.filemode(parent.stat().st_mode)}): put the work folder under a "
+            f"world-searchable directory such as /tmp, or run as a non-root user"
+        )
     for root, dirs, files in os.walk(path):
         # a running solver may add (and the driver remove) entries meanwhile
         for entry in [root] + [os.path.join(root, name) for name in dirs + files]:
@@ -117,10 +127,14 @@ class Command:
         cmd = [executable(self.app), "-case", str(self.case), *self.args]
         if self.processes > 1:
             cmd = [executable("mpirun"), "-np", str(self.processes), *cmd, "-parallel"]
+        options = []
+        if self.processes == 1:
+            # dies with Python: a process waiting at a gate or handshake would otherwise wait
+            # forever after a killed run (set after the change of user, which clears it)
+            options += ["--pdeathsig", "SIGKILL"]
         if self.unprivileged and is_root():
-            drop = [f"--reuid={NOBODY_UID}", f"--regid={NOBODY_UID}", "--clear-groups"]
-            cmd = [executable("setpriv"), *drop, *cmd]
-        return cmd
+            options += [f"--reuid={NOBODY_UID}", f"--regid={NOBODY_UID}", "--clear-groups"]
+        return [executable("setpriv"), *options, *cmd] if options else cmd
 
     def env(self) -> dict[str, str]:
         env = foam_env(self.cwd, parallel=self.processes > 1)
