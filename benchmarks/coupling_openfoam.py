@@ -52,12 +52,9 @@ RUNS = {
     # the accuracy a looser tolerance buys back (difference to the reference below)
     "iqn-ils-am-1e-3": ["coupling.scheme=iqn-ils-am", "coupling.tolerance_rel=1e-3"],
     "explicit-am": ["coupling.scheme=explicit-am"],
-    # one solve per window needs no checkpoints: pimpleFoam stays alive (the lead-in too, so
-    # the prescribed-motion cost is the persistent driver's)
-    "explicit-am-persistent": ["coupling.scheme=explicit-am", "fluid.driver=persistent"],
-    # implicit with pimpleFoam kept loaded: a repeated window goes on with a prelaunched
-    # process (fluid_adapter/openfoam/drivers.py)
-    "iqn-ils-am-persistent": ["coupling.scheme=iqn-ils-am", "fluid.driver=persistent"],
+    # the case's driver keeps pimpleFoam loaded (persistent); with one launch per solve instead
+    "iqn-ils-am-relaunch": ["coupling.scheme=iqn-ils-am", "fluid.driver=relaunch"],
+    "explicit-am-relaunch": ["coupling.scheme=explicit-am", "fluid.driver=relaunch"],
 }
 
 
@@ -140,7 +137,7 @@ def main() -> None:
         rows.append(one_run(name, overrides, args.windows, folder))
         r = rows[-1]
         print(
-            f"{name:12s} {r['status']:24s} solves/window {r['mean_solves']:5.2f}  "
+            f"{name:20s} {r['status']:24s} solves/window {r['mean_solves']:5.2f}  "
             f"{r['wall_s_per_window']:6.2f} s/window  x{r['ratio_to_prescribed']:5.2f} of "
             f"prescribed  non-fluid {100 * r['non_fluid_share']:4.1f} %",
             flush=True,
@@ -155,7 +152,7 @@ def main() -> None:
                 r["tip_error_m"] = float(tip)
                 r["force_error_rel"] = float(force / np.abs(ref["force_z_n"][:k]).max())
                 print(
-                    f"{r['scheme']:12s} tip diff {tip * 1e3:.4f} mm  "
+                    f"{r['scheme']:20s} tip diff {tip * 1e3:.4f} mm  "
                     f"Fz diff {100 * r['force_error_rel']:.3f} % of max"
                 )
     if args.json:

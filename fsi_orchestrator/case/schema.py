@@ -425,7 +425,13 @@ class Fluid:
         "WALE leaves resolved laminar shear alone, Smagorinsky damps it (docs/openfoam.md).",
     )
     time_scheme: TimeScheme = param(TimeScheme.BACKWARD, "openfoam: ddt scheme.")
-    driver: FluidDriver = param(FluidDriver.RELAUNCH, "openfoam: how solves are driven.")
+    driver: FluidDriver = param(
+        FluidDriver.RELAUNCH,
+        "openfoam: how solves are driven: `relaunch` starts pimpleFoam for every solve (Courant "
+        "sub-steps allowed); `persistent` keeps it loaded between windows (one fluid step per "
+        "window; a repeated window goes on with a process started from its start, as root "
+        "run as `nobody`).",
+    )
     processes: int = param(
         1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1
     )
