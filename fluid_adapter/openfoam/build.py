@@ -97,8 +97,8 @@ def build_openfoam_participant(
     if fresh:
         run.init_samples()
     kind = driver or case.fluid.driver
-    blocked = runner.unreachable_for_nobody(workdir)
-    if kind is FluidDriver.PERSISTENT and blocked is not None and driver is None:
+    blocked = runner.unreachable_for_nobody(workdir) if kind is FluidDriver.PERSISTENT else None
+    if blocked is not None and driver is None:
         warnings.warn(
             f"fluid.driver = \"persistent\" runs OpenFOAM as 'nobody' when root (systemCall "
             f"is disabled for root), which cannot pass {blocked}: using the relaunch driver "

@@ -51,12 +51,12 @@ def _start_folder(run: FoamRun, t: float, dt: float) -> str:
     return "0" if t == 0.0 else run.time_folder(t, dt)
 
 
-def _fifo(path, mode: int = 0o666) -> None:
+def _fifo(path) -> None:
     """A fresh named pipe (whatever an ended process left in the old one is gone)."""
     if path.exists() or path.is_symlink():
         path.unlink()
     os.mkfifo(path)
-    os.chmod(path, mode)  # umask-proof: an unprivileged solver must open it
+    os.chmod(path, 0o666)  # umask-proof: an unprivileged solver must open it
 
 
 @dataclass(eq=False)
@@ -69,7 +69,6 @@ class _Process:
     proc: subprocess.Popen
     start: float  # the time folder it started from
     time: float
-    gated: bool
     fds: dict[str, int] = field(default_factory=dict)  # handshake pipes (persistent)
 
 
@@ -93,7 +92,7 @@ def _launch(
     command = replace(
         run.command(unprivileged=handshake), log_name=name, gate=gate, handshake=pipes
     )
-    return _Process(slot, command, runner.launch(command), start, start, gated, fds)
+    return _Process(slot, command, runner.launch(command), start, start, fds)
 
 
 def _remove_fifos(run: FoamRun) -> None:
