@@ -396,3 +396,31 @@ def test_imvj_keeps_the_jacobian_across_windows():
         counts.append(k)
         np.testing.assert_allclose(x, exact, rtol=1e-8)
     assert counts[0] <= n + 2 and max(counts[1:]) <= 3
+
+
+def test_imvj_warm_started_from_another_run_skips_the_learning():
+    """A Jacobian learned by one run (saved state) warm-starts another on the same affine
+    map: its first window converges in the 1-2 QN steps that the first run reached only after
+    learning (n + 1 or more cold); the state of another layout is refused by shape."""
+    from fsi_orchestrator.acceleration import AccelerationStateError
+    from fsi_orchestrator.acceleration.iqn_ils import IQNILSSettings
+    from fsi_orchestrator.acceleration.iqn_imvj import IQNIMVJAcceleration
+
+    rng = np.random.default_rng(3)
+    n = 6
+    a = rng.normal(size=(n, n)) * 0.4
+    h = affine(a, rng.normal(size=n))
+
+    def fresh():
+        return started(IQNIMVJAcceleration(IQNILSSettings(initial_relaxation=0.5)), n)
+
+    learner = fresh()
+    cold = [run_window(learner, h, np.zeros(n))[1] for _ in range(3)]
+    warm = fresh()
+    warm.warm_start(learner.save_state())
+    x, solves, _ = run_window(warm, h, np.zeros(n))
+    np.testing.assert_allclose(x, np.linalg.solve(np.eye(n) - a, h(np.zeros(n))), rtol=1e-8)
+    assert cold[0] >= n + 1 and solves <= 3
+    other = started(IQNIMVJAcceleration(IQNILSSettings(initial_relaxation=0.5)), n + 1)
+    with pytest.raises(AccelerationStateError, match="imvj_jacobian"):
+        other.warm_start(learner.save_state())

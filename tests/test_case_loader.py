@@ -68,6 +68,10 @@ def test_override_is_validated_like_the_file(tmp_path):
             "[time]\nperiods = 2\n[coupling]\nexplicit_periods = 2\n",
             "coupling.explicit_periods (2) must be less than time.periods (2)",
         ),
+        (
+            '[coupling]\nscheme = "iqn-ils"\njacobian_from = "../run"\n',
+            'coupling.jacobian_from applies to coupling.scheme = "iqn-ils-am" only',
+        ),
         ('[fluid]\nmodel = "lbm"\n', "fluid.model must be one of"),
         ("[analysis\nkind = 1\n", "not valid TOML"),
     ],

@@ -170,3 +170,30 @@ def test_killed_coupled_run_resumes_to_the_same_result(tmp_path, text):
         assert b["time_s"].shape == a["time_s"].shape == (20, 1)
         if text is EXPLICIT_START:
             assert a["coupling/fluid_solves"][:10, 0].tolist() == [1.0] * 10
+
+
+def test_a_learned_jacobian_that_does_not_fit_is_refused_in_one_line(tmp_path):
+    """coupling.jacobian_from: a missing file, a run without a quasi-Newton Jacobian
+    (explicit-am) and a run on another shell mesh each stop the run before it starts, with one
+    line naming the key and the file."""
+    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    (tmp_path / "case.toml").write_text(BEAM)
+    explicit = ["--set", "coupling.scheme=explicit-am", "--set", "time.periods=0.2"]
+    other_mesh = ["--set", "mesh.level=default", "--set", "time.periods=0.2"]
+    for folder, extra in (("explicit", explicit), ("other_mesh", other_mesh)):
+        made = subprocess.run([*cmd, str(tmp_path), "--output", str(tmp_path / folder), *extra])
+        assert made.returncode == 0
+    for source, expected in (
+        ("missing", "does not exist"),
+        ("explicit", 'holds no quasi-Newton Jacobian (that run\'s scheme was not "iqn-ils-am")'),
+        ("other_mesh", "shell nodes, this case's shell has"),
+    ):
+        done = subprocess.run(
+            [*cmd, str(tmp_path), "--set", f"coupling.jacobian_from={source}"],
+            capture_output=True,
+            text=True,
+        )
+        assert done.returncode == 2 and expected in done.stderr, done.stderr
+        line = done.stderr.strip()
+        assert "\n" not in line and line.startswith("error: coupling.jacobian_from: ")
+        assert str(tmp_path / source) in line

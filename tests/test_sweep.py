@@ -133,3 +133,30 @@ def test_the_linear_sweep_oscillates_about_the_mean_voltage_equilibrium(tmp_path
     transient = run_cli.run_dynamic(case, tmp_path / "run", resume=False, show_progress=False)
     assert row["tip_amplitude_m"] == pytest.approx(transient["tip_amplitude_m"], rel=0.02)
     assert row["tip_amplitude_m"] < 0.9 * 7.22e-3
+
+
+def test_each_transient_point_starts_from_the_jacobian_the_last_one_learned(tmp_path, monkeypatch):
+    """fsi-sweep --method transient with OpenFOAM and iqn-ils-am: every point after the first
+    takes coupling.jacobian_from = the previous point's output (fewer fluid solves, same result
+    to the tolerance: docs/coupling.md), unless the case names its own; a failed point passes
+    nothing on. (The runs are stubbed: the wiring is checked here, the warm start itself in
+    tests/test_openfoam_coupled.py.)"""
+    seen = []
+
+    def stub(case, output, **kwargs):
+        seen.append(case.coupling.jacobian_from)
+        if case.actuation.frequency_hz == 4.0:
+            raise RuntimeError("pimpleFoam crashed")
+        output.mkdir(parents=True)
+        (output / "checkpoint.h5").write_bytes(b"")
+        return {"tip_amplitude_m": 1e-3, "mean_thrust_n": 1e-3}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    case = load_case(ROOT / "cases/fixed_head_3Hz")
+    sweep_cli.transient_sweep(case, [3.0, 4.0, 5.0, 6.0], [Waveform.SINE], tmp_path)
+    first = str((tmp_path / "sine_3Hz").resolve())
+    assert seen == ["", first, first, str((tmp_path / "sine_5Hz").resolve())]
+    own = load_case(ROOT / "cases/fixed_head_3Hz", ["coupling.jacobian_from=/elsewhere"])
+    assert sweep_cli.chained(own, tmp_path / "sine_3Hz") is own
+    potential = load_case(ROOT / "cases/fixed_head_3Hz", ["fluid.model=potential"])
+    assert sweep_cli.chained(potential, tmp_path / "sine_3Hz") is potential

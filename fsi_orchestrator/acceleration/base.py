@@ -185,11 +185,11 @@ class FieldScaling:
         return {"scaling_weights": self.weights.copy(), "scaling_sums": self._sums.copy()}
 
     def load_state(self, state: Mapping[str, NDArray]) -> None:
-        self.weights = _restored(state, "scaling_weights", self.weights.shape)
-        self._sums = _restored(state, "scaling_sums", self._sums.shape)
+        self.weights = restored(state, "scaling_weights", self.weights.shape)
+        self._sums = restored(state, "scaling_sums", self._sums.shape)
 
 
-def _restored(state: Mapping[str, NDArray], key: str, shape: tuple[int, ...]) -> NDArray:
+def restored(state: Mapping[str, NDArray], key: str, shape: tuple[int, ...]) -> NDArray:
     """A copy of ``state[key]``, checked against the expected shape."""
     if key not in state:
         raise AccelerationStateError(f"saved accelerator state lacks {key!r}")
@@ -208,11 +208,11 @@ def restored_optional(state: Mapping[str, NDArray], key: str, size: int) -> NDAr
     value = np.array(state[key], dtype=float)
     if value.size == 0:
         return None
-    return _restored(state, key, (size,))
+    return restored(state, key, (size,))
 
 
 def restored_scalar(state: Mapping[str, NDArray], key: str) -> float:
-    return float(_restored(state, key, ()))
+    return float(restored(state, key, ()))
 
 
 def optional_array(value: NDArray | None) -> NDArray:

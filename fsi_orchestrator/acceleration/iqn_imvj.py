@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
+from .base import restored
 from .iqn_ils import IQNILSAcceleration, IQNILSSettings
 from .quasi_newton import qr2_filter
 
@@ -60,9 +61,15 @@ class IQNIMVJAcceleration(IQNILSAcceleration):
         correction = (w - v + self._jacobian @ v) @ solve_triangular(rf, q.T)
         self._jacobian = self._jacobian - correction * weights[None, :]
 
+    def warm_start(self, state: Mapping[str, NDArray]) -> None:
+        """Start from the Jacobian another run learned (its saved state): for a map that
+        changes little between runs (the same structure at another drive) the first windows
+        need not learn it again. Only the Jacobian is taken."""
+        self._jacobian = restored(state, "imvj_jacobian", self._jacobian.shape)
+
     def save_state(self):
         return {**super().save_state(), "imvj_jacobian": self._jacobian.copy()}
 
     def load_state(self, state: Mapping[str, NDArray]) -> None:
         super().load_state(state)
-        self._jacobian = np.array(state["imvj_jacobian"], dtype=float)
+        self._jacobian = restored(state, "imvj_jacobian", self._jacobian.shape)

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .params import CaseError, build_section
-from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, GeometryKind
+from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, CouplingScheme, GeometryKind
 
 CASE_FILE = "case.toml"
 
@@ -132,6 +132,12 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")
     c = case.coupling
+    if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
+        raise CaseError(
+            f'coupling.jacobian_from applies to coupling.scheme = "iqn-ils-am" only (got '
+            f'"{c.scheme.value}"), whose quasi-Newton update keeps a Jacobian; remove it or '
+            "change the scheme"
+        )
     if c.explicit_periods > 0:
         if c.scheme.value != "iqn-ils-am":
             raise CaseError(

