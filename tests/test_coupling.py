@@ -197,3 +197,25 @@ def test_a_learned_jacobian_that_does_not_fit_is_refused_in_one_line(tmp_path):
         line = done.stderr.strip()
         assert "\n" not in line and line.startswith("error: coupling.jacobian_from: ")
         assert str(tmp_path / source) in line
+
+
+def test_a_warm_started_run_reruns_in_its_own_folder_and_resumes_without_the_source(tmp_path):
+    """coupling.jacobian_from may name the folder the run writes to (a rerun: the Jacobian is
+    read before anything is overwritten), and --resume takes the Jacobian of the run's own
+    checkpoint, so a warm-started run goes on after its source is gone."""
+    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    (tmp_path / "case.toml").write_text(BEAM)
+
+    def fsi_run(output: str, periods: float, *extra: str) -> None:
+        sets = ["--set", f"time.periods={periods}", "--set", "fluid.mesh_level=default"]
+        args = [*cmd, str(tmp_path), "--output", str(tmp_path / output), *sets, *extra]
+        done = subprocess.run(args, capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+
+    fsi_run("output", 0.5)
+    fsi_run("output", 0.5, "--set", "coupling.jacobian_from=output")
+    fsi_run("warm", 0.5, "--set", "coupling.jacobian_from=output")
+    (tmp_path / "output").rename(tmp_path / "gone")
+    fsi_run("warm", 1, "--set", "coupling.jacobian_from=output", "--resume")
+    with h5py.File(tmp_path / "warm" / "results.h5") as h5:
+        assert h5["time_s"].shape == (20, 1)

@@ -164,7 +164,7 @@ def coupled_setup(case: Case, fluid_factory=None):
     return run.solid, run.coupling
 
 
-def build_coupled_run(case: Case, fluid_factory=None) -> CoupledRun:
+def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -> CoupledRun:
     """A partitioned run. The structure starts on the periodic orbit estimated with the fast
     added mass (or from rest, choose_start); with an *-am scheme it keeps that mass."""
     from fluid_adapter.fast import fast_added_mass
@@ -174,8 +174,10 @@ def build_coupled_run(case: Case, fluid_factory=None) -> CoupledRun:
     from ..coupling import Coupling
 
     model = build_shell_model(case)
-    # read before the fluid is set up: a wrong file fails at once
-    learned = learned_jacobian(case, model.n_nodes) if case.coupling.jacobian_from else None
+    # read before the fluid is set up: a wrong file fails at once. A resumed run takes the
+    # Jacobian of its own checkpoint
+    warm = case.coupling.jacobian_from and not resume
+    learned = learned_jacobian(case, model.n_nodes) if warm else None
     estimate = added_mass_for_preconditioning(case, model)
     model.set_added_mass(estimate.matrix)  # for the periodic start
     solid = build_shell_participant(case, model)

@@ -77,7 +77,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         factory = None
         if case.fluid.model is FluidModel.OPENFOAM:
             factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume)
-        run = build_coupled_run(case, factory)
+        run = build_coupled_run(case, factory, resume=resume)
         case, solid, coupling, start_note = run.case, run.solid, run.coupling, run.start_note
         if start_note is not None:
             print(start_note, file=sys.stderr)

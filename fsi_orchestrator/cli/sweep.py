@@ -2,7 +2,10 @@
 
 ``--method linear`` (default, seconds): the wet shell's linear periodic response per frequency
 and harmonic (the added mass is computed once), thrust by Lighthill's theory on that motion.
-``--method transient``: the nonlinear time-domain run per frequency (as ``fsi-run``).
+``--method transient``: the nonlinear time-domain run per frequency (as ``fsi-run``); with
+OpenFOAM and iqn-ils-am each point starts from the quasi-Newton Jacobian the previous point on
+the same MPI rank learned (``coupling.jacobian_from``: fewer fluid solves, the same result to
+the coupling tolerance).
 Writes ``sweep.csv`` and ``sweep.json`` to the output folder and prints a table.
 """
 
