@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -206,15 +207,17 @@ def test_a_warm_started_run_reruns_in_its_own_folder_and_resumes_without_the_sou
     cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
     (tmp_path / "case.toml").write_text(BEAM)
 
-    def fsi_run(output: str, periods: float, *extra: str) -> None:
+    def fsi_run(output: str, periods: float, *extra: str) -> dict:
         sets = ["--set", f"time.periods={periods}", "--set", "fluid.mesh_level=default"]
         args = [*cmd, str(tmp_path), "--output", str(tmp_path / output), *sets, *extra]
         done = subprocess.run(args, capture_output=True, text=True)
         assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout)
 
-    fsi_run("output", 0.5)
+    assert "jacobian_from" not in fsi_run("output", 0.5)
     fsi_run("output", 0.5, "--set", "coupling.jacobian_from=output")
-    fsi_run("warm", 0.5, "--set", "coupling.jacobian_from=output")
+    warm = fsi_run("warm", 0.5, "--set", "coupling.jacobian_from=output")
+    assert warm["jacobian_from"] == str(tmp_path / "output" / "checkpoint.h5")  # provenance
     (tmp_path / "output").rename(tmp_path / "gone")
     fsi_run("warm", 1, "--set", "coupling.jacobian_from=output", "--resume")
     with h5py.File(tmp_path / "warm" / "results.h5") as h5:

@@ -211,15 +211,21 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     return CoupledRun(case, solid, coupling, start_note)
 
 
+def learned_jacobian_path(case: Case):
+    """The checkpoint coupling.jacobian_from names (a run's output folder or the file)."""
+    from ..results import CHECKPOINT_FILE
+
+    path = case.directory / case.coupling.jacobian_from
+    return path / CHECKPOINT_FILE if path.is_dir() else path
+
+
 def learned_jacobian(case: Case, n_nodes: int) -> dict:
     """coupling.jacobian_from: the quasi-Newton state saved in that checkpoint (a run's
     output folder or the file), checked against a shell of ``n_nodes`` interface nodes."""
     from ..case import CaseError
     from ..results import CHECKPOINT_FILE, read_checkpoint
 
-    path = case.directory / case.coupling.jacobian_from
-    if path.is_dir():
-        path = path / CHECKPOINT_FILE
+    path = learned_jacobian_path(case)
     where = f"coupling.jacobian_from: {path}"
     if not path.is_file():
         raise CaseError(

@@ -21,6 +21,7 @@ from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,
     is_coupled,
+    learned_jacobian_path,
     openfoam_fluid_factory,
     shell_with_fast_fluid,
 )
@@ -134,6 +135,9 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
             if iterated.any()
             else None,
         }
+    learned = {}  # where the quasi-Newton's first Jacobian came from
+    if case.coupling.jacobian_from:
+        learned = {"jacobian_from": str(learned_jacobian_path(case))}
     start = {}
     if coupling.start_fit is not None:
         start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
@@ -148,6 +152,7 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         "max_fluid_solves_per_window": int(solves.max()),
         "unconverged_windows": int((converged[iterated] == 0).sum()),
         **explicit,
+        **learned,
     }
 
 
