@@ -33,34 +33,38 @@ from fsi_orchestrator.case.timing import windows_per_period  # noqa: E402
 CASE = ROOT / "cases" / "fixed_head_3Hz"
 
 
-def run(predictor: str, level: str, periods: int, out: Path) -> dict:
-    command = [
-        str(Path(sys.executable).with_name("fsi-run")),
-        str(CASE),
-        "--output",
-        str(out),
-        "--json",
-        "--quiet",
-        "--set",
-        f"fluid.mesh_level={level}",
-        "--set",
-        f"time.periods={periods}",
-        "--set",
-        f"coupling.predictor={predictor}",
-    ]
+def fsi_run_per_period(out: Path, *settings: str) -> dict:
+    """`fsi-run` on the main job with `--set` ``settings``: its --json summary plus, per period,
+    the mean fluid solves per window, the median predictor miss and the median contraction of
+    the first quasi-Newton update (predictor miss over the second residual)."""
+    command = [str(Path(sys.executable).with_name("fsi-run")), str(CASE), "--output", str(out)]
+    command += ["--json", "--quiet"]
+    for setting in settings:
+        command += ["--set", setting]
     env = {**os.environ, "HDF5_USE_FILE_LOCKING": "FALSE"}
     done = subprocess.run(command, capture_output=True, text=True, env=env, check=False)
     if done.returncode != 0:
-        raise SystemExit(f"fsi-run failed for predictor {predictor}:\n{done.stderr[-2000:]}")
+        raise SystemExit(f"fsi-run failed ({out.name}):\n{done.stderr[-2000:]}")
     summary = json.loads(done.stdout)
     with h5py.File(out / "results.h5", "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         miss = h5["coupling/predictor_miss"][:, 0]
+        contraction = miss / h5["coupling/updated_miss"][:, 0]
     n = windows_per_period(load_case(CASE))
     per = [slice(k, k + n) for k in range(0, len(solves), n)]
     summary["solves_per_period"] = [float(solves[s].mean()) for s in per]
     summary["miss_per_period"] = [float(np.median(miss[s])) for s in per]
+    summary["contraction_per_period"] = [float(np.median(contraction[s])) for s in per]
     return summary
+
+
+def run(predictor: str, level: str, periods: int, out: Path) -> dict:
+    return fsi_run_per_period(
+        out,
+        f"fluid.mesh_level={level}",
+        f"time.periods={periods}",
+        f"coupling.predictor={predictor}",
+    )
 
 
 def main(argv=None) -> int:

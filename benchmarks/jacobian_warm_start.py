@@ -15,47 +15,23 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-import h5py
-import numpy as np
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from fsi_orchestrator.case.loader import load_case  # noqa: E402
-from fsi_orchestrator.case.timing import windows_per_period  # noqa: E402
-
-CASE = ROOT / "cases" / "fixed_head_3Hz"
+from coupling_predictors import fsi_run_per_period  # noqa: E402
 
 
 def run(out: Path, level: str, frequency_hz: float, periods: int, *extra: str) -> dict:
-    command = [str(Path(sys.executable).with_name("fsi-run")), str(CASE), "--output", str(out)]
-    command += ["--json", "--quiet"]
-    for setting in (
+    return fsi_run_per_period(
+        out,
         f"fluid.mesh_level={level}",
         f"actuation.frequency_hz={frequency_hz:g}",
         f"time.periods={periods}",
         *extra,
-    ):
-        command += ["--set", setting]
-    env = {**os.environ, "HDF5_USE_FILE_LOCKING": "FALSE"}
-    done = subprocess.run(command, capture_output=True, text=True, env=env, check=False)
-    if done.returncode != 0:
-        raise SystemExit(f"fsi-run failed ({out.name}):\n{done.stderr[-2000:]}")
-    summary = json.loads(done.stdout)
-    with h5py.File(out / "results.h5", "r") as h5:
-        solves = h5["coupling/fluid_solves"][:, 0]
-        contraction = h5["coupling/predictor_miss"][:, 0] / h5["coupling/updated_miss"][:, 0]
-    n = windows_per_period(load_case(CASE))
-    per = [slice(k, k + n) for k in range(0, len(solves), n)]
-    summary["solves_per_period"] = [float(solves[s].mean()) for s in per]
-    summary["contraction_per_period"] = [float(np.median(contraction[s])) for s in per]
-    return summary
+    )
 
 
 def main(argv=None) -> int:
