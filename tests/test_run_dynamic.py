@@ -142,3 +142,31 @@ def test_the_fluid_force_summary_reports_the_turning_load_of_the_last_period(tmp
     assert summary["mean_lateral_force_n"] == pytest.approx(0.2)
     assert summary["mean_yaw_moment_nm"] == pytest.approx(-0.1 * 0.2)  # M_y = z F_x - x F_z
     assert summary["lateral_force_amplitude_n"] == pytest.approx(1.0, rel=0.01)
+
+
+def test_the_summary_says_when_the_last_period_is_not_periodic_yet(tmp_path, capsys):
+    """Per-period tail amplitudes (exactly the half peak-to-peak of each period in
+    results.h5) and their change over the last period; a run that started on its periodic
+    orbit is periodic (change < 1 %, no note), one started from rest is not, and stderr says so."""
+    case = tmp_path / "beam"
+    case.mkdir()
+    (case / "case.toml").write_text(BEAM)
+    assert run_cli.main([str(case), "--json", "--quiet", "--output", str(tmp_path / "p")]) == 0
+    out = capsys.readouterr()
+    periodic = json.loads(out.out)
+    assert len(periodic["tip_amplitude_per_period_m"]) == 4
+    assert abs(periodic["tip_amplitude_change_last_period"]) < 0.01
+    assert "not periodic yet" not in out.err
+
+    args = [str(case), "--json", "--quiet", "--set", "time.start=rest"]
+    assert run_cli.main([*args, "--output", str(tmp_path / "r")]) == 0
+    out = capsys.readouterr()
+    rest = json.loads(out.out)
+    with h5py.File(rest["results"]) as h5:
+        z = h5["shell/tip_displacement_m"][:, 2]
+    expected = [np.ptp(z[k : k + 20]) / 2 for k in range(0, 80, 20)]
+    np.testing.assert_allclose(rest["tip_amplitude_per_period_m"], expected, rtol=1e-12)
+    change = (expected[3] - expected[2]) / expected[3]
+    assert rest["tip_amplitude_change_last_period"] == pytest.approx(change, rel=1e-12)
+    assert abs(change) > 0.01
+    assert f"tail amplitude changed by {100 * change:+.1f} %" in out.err

@@ -53,6 +53,18 @@ def progress_bar(total: int, enabled: bool):
         yield lambda done, total: bar.update(task, completed=done)
 
 
+# a start-up still settling: the tail amplitude changed by more than this over the last period
+# (the main job's two periods beat with the heavily damped wet first mode, docs/coupling.md)
+SETTLED_CHANGE = 0.01
+
+
+def complete_periods(values: np.ndarray, per_period: int) -> list[np.ndarray]:
+    """The complete periods of a window series, counted back from its end, oldest first."""
+    n = len(values) // per_period
+    start = len(values) - n * per_period
+    return [values[start + k * per_period : start + (k + 1) * per_period] for k in range(n)]
+
+
 def dynamic_summary(case: Case, results_path: Path) -> dict:
     with h5py.File(results_path, "r") as h5:
         t = h5["time_s"][:, 0]
@@ -60,9 +72,19 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
         newton = h5["shell/newton_iterations"][:, 0]
         wall = h5["wall_s"][:, 0]
     last = tip[-min(len(tip), windows_per_period(case)) :, 2]
+    amplitudes = [
+        float(np.ptp(z) / 2) for z in complete_periods(tip[:, 2], windows_per_period(case))
+    ]
+    change = {}
+    if len(amplitudes) >= 2 and amplitudes[-1] > 0:
+        change = {
+            "tip_amplitude_change_last_period": (amplitudes[-1] - amplitudes[-2]) / amplitudes[-1]
+        }
     return {
         "tip_displacement_m": tip[-1].tolist(),
         "tip_amplitude_m": float((last.max() - last.min()) / 2),
+        "tip_amplitude_per_period_m": amplitudes,
+        **change,
         "tip_max_abs_m": float(np.abs(tip[:, 2]).max()),
         "end_time_s": float(t[-1]),
         "windows": int(len(t)),
@@ -119,7 +141,28 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
         summary["thrust_source"] = "slender_body"
     summary["wall_s"] = time.perf_counter() - start
+    note = settling_note(summary)
+    if note is not None:
+        print(note, file=sys.stderr)
     return summary
+
+
+def settling_note(summary: dict) -> str | None:
+    """A line for stderr when the last period's tail amplitude is still changing: the figures
+    are then a start-up's, not the periodic state's."""
+    change = summary.get("tip_amplitude_change_last_period")
+    if change is None or abs(change) <= SETTLED_CHANGE:
+        return None
+    a = summary["tip_amplitude_per_period_m"]
+    thrust = summary.get("mean_thrust_per_period_n", [])
+    thrust_part = (
+        f", the mean thrust {thrust[-2]:.4g} -> {thrust[-1]:.4g} N" if len(thrust) >= 2 else ""
+    )
+    return (
+        f"note: not periodic yet: over the last period the tail amplitude changed by "
+        f"{100 * change:+.1f} % ({1e3 * a[-2]:.3f} -> {1e3 * a[-1]:.3f} mm){thrust_part}; "
+        "for the periodic state run more periods (time.periods)"
+    )
 
 
 def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
@@ -173,8 +216,10 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
             # about the vertical (y) axis through the nose, right-handed
             "mean_yaw_moment_nm": float(moment[last, 1].mean()),
         }
+    periods = complete_periods(thrust, windows_per_period(case))
     return {
         "mean_thrust_n": float(thrust[last].mean()),
+        "mean_thrust_per_period_n": [float(p.mean()) for p in periods],
         "lateral_force_amplitude_n": float(np.ptp(force[last, 2]) / 2),
         **turning,
     }

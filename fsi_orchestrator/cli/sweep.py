@@ -141,6 +141,11 @@ def transient_sweep(
                     "mean_fluid_solves_per_window": summary.get(
                         "mean_fluid_solves_per_window", 1.0 if summary else nan
                     ),
+                    # a start-up not yet settled (fsi-run's note): the point's figures are
+                    # its last period's, not the periodic state's
+                    "tip_amplitude_change_last_period": summary.get(
+                        "tip_amplitude_change_last_period", nan
+                    ),
                     "status": status,
                 },
             )
