@@ -118,9 +118,16 @@ def newton(
                 f"shell: singular tangent {where} (Newton iteration {it}); is the "
                 "plate clamped (boundary.head)?"
             )
+        full = float(np.max(np.abs(dx * scale)))
+        limit = settings.tolerance * max(full if first is None else first, reference, 1e-300)
+        if full <= limit or full < 1e-15:
+            # converged on the full step, which the line search takes once the increments are
+            # this small: the residual and tangent at x + dx would go unused (about a quarter
+            # of a coupled re-solve's assembly)
+            return x + dx, it
         step, r, K, update = _line_search(residual, x, dx, r)
         x += step * dx
-        size = step * np.max(np.abs(dx * scale))
+        size = step * full
         first = size if first is None else first
         if size <= settings.tolerance * max(first, reference, 1e-300) or size < 1e-15:
             return x, it
