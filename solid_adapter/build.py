@@ -40,7 +40,8 @@ def has_actuators(case: Case) -> bool:
 
 
 def newton_settings(case: Case) -> NewtonSettings:
-    return NewtonSettings(case.analysis.newton_tolerance, case.analysis.max_newton_iterations)
+    a = case.analysis
+    return NewtonSettings(a.newton_tolerance, a.max_newton_iterations, a.reuse_tangent)
 
 
 def static_loads(case: Case, model: ShellModel) -> StaticLoads:

@@ -187,6 +187,7 @@ class ShellParticipant:
         self.state, self._force, self._pressure = state.copy(), force.copy(), pressure.copy()
 
     def save_state(self) -> dict[str, NDArray | float | int]:
+        self.integrator.kept_tangent.forget()  # the resumed run starts without it too
         s = self.state
         return {
             "t": s.t,
@@ -217,6 +218,7 @@ class ShellParticipant:
         self._force = np.array(state["force"], dtype=float)
         self._pressure = np.array(state["pressure"], dtype=float)
         self.integrator.newton_iterations = int(state["newton_iterations"])
+        self.integrator.kept_tangent.forget()
         self._answer = None
 
     def finalize(self) -> None:

@@ -353,6 +353,13 @@ class Analysis:
         1e-8, "Relative tolerance on the Newton increment and energy norm.", gt=0, lt=1
     )
     max_newton_iterations: int = param(30, "Newton iterations per step before giving up.", ge=1)
+    reuse_tangent: bool = param(
+        True,
+        "dynamic (generalized-alpha, newmark): a step starts with the last factored tangent of "
+        "a step of the same size (modified Newton, residuals only) and factors a new one when "
+        "an increment shrinks less than 4x; the same answer to the Newton tolerance, about "
+        "half the structure's time in a coupled window.",
+    )
     rayleigh_alpha_per_s: float = param(
         0.0, "Mass-proportional Rayleigh damping.", unit="1/s", ge=0
     )

@@ -71,10 +71,9 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
         tip = h5["shell/tip_displacement_m"][:]
         newton = h5["shell/newton_iterations"][:, 0]
         wall = h5["wall_s"][:, 0]
-    last = tip[-min(len(tip), windows_per_period(case)) :, 2]
-    amplitudes = [
-        float(np.ptp(z) / 2) for z in complete_periods(tip[:, 2], windows_per_period(case))
-    ]
+    z, per_period = tip[:, 2], windows_per_period(case)
+    last = z[-min(len(z), per_period) :]  # a run shorter than a period: all of it
+    amplitudes = [float(np.ptp(period) / 2) for period in complete_periods(z, per_period)]
     change = {}
     if len(amplitudes) >= 2 and amplitudes[-1] > 0:
         change = {
@@ -82,7 +81,7 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
         }
     return {
         "tip_displacement_m": tip[-1].tolist(),
-        "tip_amplitude_m": float((last.max() - last.min()) / 2),
+        "tip_amplitude_m": float(np.ptp(last) / 2),
         "tip_amplitude_per_period_m": amplitudes,
         **change,
         "tip_max_abs_m": float(np.abs(tip[:, 2]).max()),
