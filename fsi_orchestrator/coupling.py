@@ -28,6 +28,7 @@ the windows after it are iterated to the tolerance (docs/coupling.md).
 from __future__ import annotations
 
 import dataclasses
+import time
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -162,6 +163,16 @@ class Coupling:
         # the tolerance refers to the fluid force's size over the last windows: its norm passes
         # through zero twice a period, where a purely instantaneous reference would be harsh
         self.force_scales: list[float] = []
+        self.fluid_wall_s = 0.0  # inside the fluid's solve / follow in the current window
+
+    def _in_fluid(self, call, *args):
+        """``call(*args)``, its wall time counted as the fluid's (results.h5
+        coupling/fluid_wall_s: the rest of a window is the coupling's and the structure's)."""
+        start = time.perf_counter()
+        try:
+            return call(*args)
+        finally:
+            self.fluid_wall_s += time.perf_counter() - start
 
     # ------------------------------------------------------------------ lead-in
     def lead_in(self, solid: Participant, dt: float) -> None:
@@ -258,7 +269,7 @@ class Coupling:
         OpenFOAM runs them in one launch). Samples from ``record_from`` on."""
         follow = getattr(self.fluid, "follow", None)
         if follow is not None:
-            forces = follow([self.mapping.consistent(motion(t)) for t in times], dt)
+            forces = self._in_fluid(follow, [self.mapping.consistent(motion(t)) for t in times], dt)
         else:
             forces = [self._prescribed_window(motion, t, dt) for t in times]
         if record_from is None:
@@ -282,11 +293,12 @@ class Coupling:
                 ACCELERATION: self.mapping.consistent(_acceleration(motion, t, dt)),
             }
         )
-        self.fluid.solve(dt)
+        self._in_fluid(self.fluid.solve, dt)
         return self.fluid.write_data()[FORCE]
 
     # ------------------------------------------------------------------ one window
     def solve_window(self, solid: Participant, dt: float, window: int) -> dict[str, float]:
+        self.fluid_wall_s = 0.0
         if window == 0:
             self.lead_in(solid, dt)
         t_end = solid.time + dt
@@ -327,6 +339,7 @@ class Coupling:
             "coupling/predictor_miss": float(predictor_miss),
             # the same after the accelerator's first update (nan: one solve)
             "coupling/updated_miss": float(updated_miss),
+            "coupling/fluid_wall_s": self.fluid_wall_s,
         }
 
     def _guarded_iteration(
@@ -387,7 +400,7 @@ class Coupling:
         solid.solve(dt)
         motion = solid.write_data()
         self.fluid.read_data({k: self.mapping.consistent(v) for k, v in motion.items()})
-        self.fluid.solve(dt)
+        self._in_fluid(self.fluid.solve, dt)
         force = self.mapping.conservative(self.fluid.write_data()[FORCE])
         self.measure.scale = max([float(np.linalg.norm(force)), *self.force_scales])
         if self.added_mass_z is not None:

@@ -99,7 +99,12 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
         solves = h5["coupling/fluid_solves"][:, 0]
         force = h5["fluid/force_n"][:]
         tip = h5["shell/tip_displacement_m"][:, 2]
+        wall, in_fluid = h5["wall_s"][:, 0], h5["coupling/fluid_wall_s"][:, 0]
     assert len(solves) == 4 and solves.min() >= 2  # implicit: at least one correction
+    # each window's time inside pimpleFoam's solves (window 0: with the lead-in) is part of
+    # its wall time, and the summary's share is the rest's
+    assert np.all((in_fluid > 0) & (in_fluid < wall))
+    assert summary["non_fluid_share"] == pytest.approx(1 - in_fluid.sum() / wall.sum(), abs=1e-12)
     # the start correction found what OpenFOAM adds to potential flow along the orbit: more
     # inertia and a damping (docs/coupling.md: 1.2-1.6 times the added mass)
     fit = summary["start_correction"]

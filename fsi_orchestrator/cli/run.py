@@ -168,6 +168,10 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
     with h5py.File(results_path, "r") as h5:
         solves = h5["coupling/fluid_solves"][:, 0]
         converged = h5["coupling/converged"][:, 0]
+        wall = h5["wall_s"][:, 0]
+        # (absent in a run resumed from an older version's results)
+        fluid = h5["coupling/fluid_wall_s"][:, 0] if "coupling/fluid_wall_s" in h5 else None
+    last = slice(-min(len(solves), windows_per_period(case)), None)
     iterated = np.array([coupling.settings.iterates(w) for w in range(len(solves))], dtype=bool)
     explicit = {}
     if coupling.settings.implicit and not iterated.all():  # an explicit start-up
@@ -180,6 +184,14 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
     learned = {}  # where the quasi-Newton's first Jacobian came from
     if case.coupling.jacobian_from:
         learned = {"jacobian_from": str(learned_jacobian_path(case))}
+    timing = {}
+    if fluid is not None and len(fluid) == len(wall):
+        # the wall time outside the fluid's solves: the structure's and the coupling's
+        timing = {
+            "non_fluid_share": float(1 - fluid.sum() / wall.sum()),
+            "last_period_non_fluid_share": float(1 - fluid[last].sum() / wall[last].sum()),
+            "last_period_wall_s_per_window": float(wall[last].mean()),
+        }
     start = {}
     if coupling.start_fit is not None:
         start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
@@ -188,11 +200,10 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         "coupling_scheme": coupling.settings.scheme,
         "mean_fluid_solves_per_window": float(solves.mean()),
         # the periodic state's cost, after the start-up windows
-        "last_period_fluid_solves_per_window": float(
-            solves[-min(len(solves), windows_per_period(case)) :].mean()
-        ),
+        "last_period_fluid_solves_per_window": float(solves[last].mean()),
         "max_fluid_solves_per_window": int(solves.max()),
         "unconverged_windows": int((converged[iterated] == 0).sum()),
+        **timing,
         **explicit,
         **learned,
     }
