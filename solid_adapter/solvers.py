@@ -156,9 +156,10 @@ def newton(
     rotation, whose membrane energy makes plain Newton overshoot.
 
     With ``kept`` (modified Newton, see KeptTangent): a ``warm`` start (x0 near the answer)
-    begins with the kept tangent; once full Newton's increments shrink KEPT_TANGENT_RATE-fold
-    it keeps the tangent it factored last; a kept tangent whose increment shrinks less is
-    replaced by a fresh one at the current iterate (or at the one before, if it grew).
+    begins with the kept tangent; once an increment of full Newton is KEEP_AFTER of the
+    solve's first it keeps the tangent it factored last; a kept tangent whose increment
+    shrinks less than KEPT_TANGENT_RATE-fold (or is not finite) is replaced by a fresh one at
+    the current iterate (or at the one before, if the increment grew).
     """
     scale = dof_scale(model)
     free = model.free_dofs if free is None else free
@@ -188,7 +189,7 @@ def newton(
                 "plate clamped (boundary.head)?"
             )
         full = float(np.max(np.abs(dx * scale))) if np.all(np.isfinite(dx)) else math.inf
-        if not fresh and full > KEPT_TANGENT_RATE * previous:
+        if not fresh and (not math.isfinite(full) or full > KEPT_TANGENT_RATE * previous):
             if full >= previous:  # the kept tangent's last step made things worse: undo it
                 x = x_before.copy()
             solve, r, K = None, None, None

@@ -216,3 +216,47 @@ def test_a_kept_tangent_gives_full_newtons_answer_with_fewer_factorizations(make
     assert np.abs(full[-1][:, 2]).max() > 0.02  # large deflection: a nonlinear step
     np.testing.assert_allclose(kept, full, rtol=0, atol=1e-8 * np.abs(full).max())
     assert kept_factored < full_factored / 3  # measured: 11 against 39
+
+
+def test_a_kept_tangent_that_fails_gives_way_to_full_newton(make_case):
+    """A kept tangent that returns NaN, or one three times too soft (each modified increment
+    overshoots, the next is twice as large), is dropped after one iteration: full Newton
+    from the last good iterate gets the same step as a run that never kept one."""
+    case = make_case(
+        **rectangle(
+            1.0,
+            0.1,
+            0.01,
+            1e9,
+            0.3,
+            1000.0,
+            mesh={"elements_length": 4, "elements_width": 1},
+            time={"step_s": 2e-3, "end_time_s": 2e-2},
+        )
+    )
+    solid = build_shell_participant(case)
+    n = len(solid.interface().points)
+    solid.store_checkpoint()
+
+    def solve(load: float):  # a coupling iterate: from the window start, warm from the last
+        solid.restore_checkpoint()
+        force = np.zeros((n, 3))
+        force[:, 2] = load
+        solid.read_data({FORCE: force})
+        solid.solve(2e-3)
+        return solid.write_data()[DISPLACEMENT]
+
+    solve(40.0)
+    reference = solve(44.0)
+    kept = solid.integrator.kept_tangent
+    nan = lambda good: lambda r: np.full_like(r, np.nan)  # noqa: E731
+    soft = lambda good: lambda r: 3.0 * good(r)  # noqa: E731
+    for breaking in (nan, soft):
+        solve(40.0)
+        broken = breaking(kept.solve)
+        kept.solve = broken
+        np.testing.assert_allclose(
+            solve(44.0), reference, rtol=0, atol=1e-8 * np.abs(reference).max()
+        )
+        assert kept.solve is not broken  # replaced by a fresh factorization
+        assert kept.solve is not broken  # replaced by the fresh factorization
