@@ -33,6 +33,24 @@ def _unloaded(model):
     return (lambda t, x, tangent: (np.zeros(model.ndof), None)), (lambda t: np.zeros(2))
 
 
+def _strip_participant(make_case, step_s: float, **case_sections):
+    """The 1 m x 0.1 m x 10 mm strip (E = 1 GPa), four elements, as a shell participant."""
+    case = make_case(
+        **rectangle(
+            1.0,
+            0.1,
+            0.01,
+            1e9,
+            0.3,
+            1000.0,
+            mesh={"elements_length": 4, "elements_width": 1},
+            time={"step_s": step_s, "end_time_s": 10 * step_s},
+            **case_sections,
+        )
+    )
+    return build_shell_participant(case)
+
+
 @pytest.mark.slow
 def test_energy_conserving_integrator_keeps_energy_over_100_periods(make_case):
     """Undamped free vibration from a 2.3 % tip deflection (nonlinear regime: there the
@@ -77,19 +95,7 @@ def test_free_vibration_period_matches_modal_frequency(make_case):
 def test_shell_participant_checkpoint_is_a_copy(make_case):
     """Mutating the live state after store_checkpoint leaves the checkpoint unchanged
     (fenics-adapter tests/unit/test_checkpointing.py)."""
-    case = make_case(
-        **rectangle(
-            1.0,
-            0.1,
-            0.01,
-            1e9,
-            0.3,
-            1000.0,
-            mesh={"elements_length": 4, "elements_width": 1},
-            time={"step_s": 1e-3, "end_time_s": 1e-2},
-        )
-    )
-    solid = build_shell_participant(case)
+    solid = _strip_participant(make_case, 1e-3)
     assert isinstance(solid, Participant)
     n = len(solid.interface().points)
     solid.store_checkpoint()
@@ -183,20 +189,7 @@ def test_a_kept_tangent_gives_full_newtons_answer_with_fewer_factorizations(make
     monkeypatch.setattr(solvers, "factorized", counting)
     runs = {}
     for reuse in (False, True):
-        case = make_case(
-            **rectangle(
-                1.0,
-                0.1,
-                0.01,
-                1e9,
-                0.3,
-                1000.0,
-                mesh={"elements_length": 4, "elements_width": 1},
-                time={"step_s": 2e-3, "end_time_s": 2e-2},
-                analysis={"reuse_tangent": reuse},
-            )
-        )
-        solid = build_shell_participant(case)
+        solid = _strip_participant(make_case, 2e-3, analysis={"reuse_tangent": reuse})
         n = len(solid.interface().points)
         factored["n"], answers = 0, []
         for window in range(4):
@@ -222,19 +215,7 @@ def test_a_kept_tangent_that_fails_gives_way_to_full_newton(make_case):
     """A kept tangent that returns NaN, or one three times too soft (each modified increment
     overshoots, the next is twice as large), is dropped after one iteration: full Newton
     from the last good iterate gets the same step as a run that never kept one."""
-    case = make_case(
-        **rectangle(
-            1.0,
-            0.1,
-            0.01,
-            1e9,
-            0.3,
-            1000.0,
-            mesh={"elements_length": 4, "elements_width": 1},
-            time={"step_s": 2e-3, "end_time_s": 2e-2},
-        )
-    )
-    solid = build_shell_participant(case)
+    solid = _strip_participant(make_case, 2e-3)
     n = len(solid.interface().points)
     solid.store_checkpoint()
 
