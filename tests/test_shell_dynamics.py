@@ -11,19 +11,18 @@ from solid_adapter.solvers import make_integrator, modal_analysis
 from tests.conftest import BIMORPH_STRIP, rectangle
 
 
+def _strip(make_case, elements=4, **case_sections):
+    """The 1 m x 0.1 m x 10 mm strip (E = 1 GPa) in ``elements`` elements along its length."""
+    mesh = {"elements_length": elements, "elements_width": 1}
+    return make_case(**rectangle(1.0, 0.1, 0.01, 1e9, 0.3, 1000.0, mesh=mesh, **case_sections))
+
+
 def _released_strip(make_case, tip_force, elements=4):
-    case = make_case(
-        **rectangle(
-            1.0,
-            0.1,
-            0.01,
-            1e9,
-            0.3,
-            1000.0,
-            loads={"tip_force_n": tip_force},
-            analysis={"kind": "static", "load_steps": 2},
-            mesh={"elements_length": elements, "elements_width": 1},
-        )
+    case = _strip(
+        make_case,
+        elements,
+        loads={"tip_force_n": tip_force},
+        analysis={"kind": "static", "load_steps": 2},
     )
     model = build_shell_model(case)
     return model, run_static(case, model).x
@@ -34,21 +33,9 @@ def _unloaded(model):
 
 
 def _strip_participant(make_case, step_s: float, **case_sections):
-    """The 1 m x 0.1 m x 10 mm strip (E = 1 GPa), four elements, as a shell participant."""
-    case = make_case(
-        **rectangle(
-            1.0,
-            0.1,
-            0.01,
-            1e9,
-            0.3,
-            1000.0,
-            mesh={"elements_length": 4, "elements_width": 1},
-            time={"step_s": step_s, "end_time_s": 10 * step_s},
-            **case_sections,
-        )
-    )
-    return build_shell_participant(case)
+    """The strip as a shell participant stepping by ``step_s``."""
+    time = {"step_s": step_s, "end_time_s": 10 * step_s}
+    return build_shell_participant(_strip(make_case, time=time, **case_sections))
 
 
 @pytest.mark.slow
@@ -118,18 +105,7 @@ def test_shell_participant_checkpoint_is_a_copy(make_case):
 
 
 def test_shell_participant_save_load_state_round_trip(make_case):
-    case = make_case(
-        **rectangle(
-            1.0,
-            0.1,
-            0.01,
-            1e9,
-            0.3,
-            1000.0,
-            loads={"tip_force_n": 0.1},
-            mesh={"elements_length": 4, "elements_width": 1},
-        )
-    )
+    case = _strip(make_case, loads={"tip_force_n": 0.1})
     a = build_shell_participant(case)
     a.solve(1e-3)
     saved = a.save_state()
