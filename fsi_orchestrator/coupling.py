@@ -164,6 +164,10 @@ class Coupling:
         # through zero twice a period, where a purely instantaneous reference would be harsh
         self.force_scales: list[float] = []
         self.fluid_wall_s = 0.0  # inside the fluid's solve / follow in the current window
+        # the lead-in's prescribed-motion windows (one fluid step each): the fluid's wall time
+        # per window, the denominator of the coupled / prescribed-motion cost ratio
+        self.prescribed_wall_s_per_window: float | None = None
+        self.lead_in_wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
 
     def _in_fluid(self, call, *args):
         """``call(*args)``, its wall time counted as the fluid's (results.h5
@@ -190,6 +194,11 @@ class Coupling:
         n, omega = self.settings.lead_in_windows, self.settings.lead_in_omega
         if n <= 0 or omega <= 0:
             return
+        start = time.perf_counter()
+        self._lead_in(solid, dt, n, omega)
+        self.lead_in_wall_s = time.perf_counter() - start
+
+    def _lead_in(self, solid: Participant, dt: float, n: int, omega: float) -> None:
         old = _periodic_motion(solid, omega)
         times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
@@ -200,6 +209,7 @@ class Coupling:
         if self.start_orbit is None:
             self._follow(ramped, times, dt)
             self._initialize_data(solid, ramped, dt)
+            self.prescribed_wall_s_per_window = self.fluid_wall_s / n
             return
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
@@ -230,6 +240,7 @@ class Coupling:
 
         self._follow(blended, times, dt)
         self._initialize_data(solid, blended, dt)
+        self.prescribed_wall_s_per_window = self.fluid_wall_s / (2 * n)
 
     def _initialize_data(self, solid: Participant, motion, dt: float) -> None:
         """The lead-in's last fluid solve ends at t = 0 with the structure's motion there: its
@@ -413,6 +424,8 @@ class Coupling:
             "unconverged_windows": self.unconverged_windows,
             "force_scales": np.array(self.force_scales),
             "norms": np.array(self.norms),
+            "prescribed_wall_s_per_window": self.prescribed_wall_s_per_window or np.nan,
+            "lead_in_wall_s": self.lead_in_wall_s,
             "predictor": self.predictor.save_state(),
             "accelerator": (self.accelerator.save_state() if self.accelerator is not None else {}),
             "fluid": self.fluid.save_state(),
@@ -422,6 +435,9 @@ class Coupling:
         self.unconverged_windows = int(state["unconverged_windows"])
         self.force_scales = [float(v) for v in np.atleast_1d(state["force_scales"])]
         self.norms = [float(v) for v in np.atleast_1d(state["norms"])]
+        prescribed = float(state.get("prescribed_wall_s_per_window", np.nan))  # older runs: none
+        self.prescribed_wall_s_per_window = None if np.isnan(prescribed) else prescribed
+        self.lead_in_wall_s = float(state.get("lead_in_wall_s", 0.0))
         self.predictor.load_state(state["predictor"])
         if self.accelerator is not None:
             self.accelerator.load_state(state["accelerator"])

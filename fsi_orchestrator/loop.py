@@ -51,6 +51,8 @@ class OutputSettings:
 
 
 ProgressFn = Callable[[int, int], None]
+# may end a run before its last window: (the results so far) -> why, or None to go on
+StopRule = Callable[[ResultsFile], str | None]
 
 
 class WindowLoop:
@@ -63,10 +65,13 @@ class WindowLoop:
         output: OutputSettings,
         progress: ProgressFn | None = None,
         coupling: Coupling | None = None,
+        stop: StopRule | None = None,
     ) -> None:
         self.solid, self.schedule, self.output = solid, schedule, output
         self.progress = progress or (lambda done, total: None)
         self.coupling = coupling
+        self.stop = stop or (lambda results: None)
+        self.stopped: str | None = None  # why the run ended before its last window
         self.window = 0
         self._flow: dict[str, PvdSeries] = {}
         self._flow_keep_until: float | None = None
@@ -94,14 +99,18 @@ class WindowLoop:
         vtk = self._vtk_writers(out / "vtk", keep_until=self.solid.time if resume else None)
         self._flow_keep_until = self.solid.time if resume else None
         try:
-            while self.window < self.schedule.n_windows:
+            if self.window > 0:  # a resumed run that had already ended stays ended
+                self.stopped = self.stop(results)
+            while self.window < self.schedule.n_windows and self.stopped is None:
                 start = wallclock.perf_counter()
                 stats = self._solve_window()
                 self.window += 1
                 self._record(results, vtk, wallclock.perf_counter() - start, stats)
+                self.stopped = self.stop(results)
                 if (
                     self.window % self.output.checkpoint_every == 0
                     or self.window == self.schedule.n_windows
+                    or self.stopped is not None
                 ):
                     self._checkpoint(out / CHECKPOINT_FILE)
                 self.progress(self.window, self.schedule.n_windows)

@@ -71,6 +71,10 @@ class ResultsFile:
         self.rows += 1
         self.h5.flush()
 
+    def column(self, name: str) -> np.ndarray | None:
+        """The rows written so far of one quantity (None: not recorded)."""
+        return self.h5[name][: self.rows] if name in self.h5 else None
+
     def close(self) -> None:
         self.h5.close()
 

@@ -105,6 +105,15 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     # its wall time, and the summary's share is the rest's
     assert np.all((in_fluid > 0) & (in_fluid < wall))
     assert summary["non_fluid_share"] == pytest.approx(1 - in_fluid.sum() / wall.sum(), abs=1e-12)
+    # the lead-in (2 prescribed-motion periods of 20 windows, in window 0) is the denominator
+    # of the coupled / prescribed cost ratio, and its wall time is not a coupled window's
+    prescribed = summary["prescribed_wall_s_per_window"]
+    assert 0 < 40 * prescribed < in_fluid[0]
+    coupled = summary["last_period_wall_s_per_window"]
+    assert in_fluid[1:].sum() < 4 * coupled < wall.sum()
+    ratio = summary["last_period_wall_ratio_to_prescribed"]
+    assert ratio == pytest.approx(coupled / prescribed, rel=1e-12)
+    assert ratio > 1  # two fluid solves or more per window, each a prescribed step's work
     # the start correction found what OpenFOAM adds to potential flow along the orbit: more
     # inertia and a damping (docs/coupling.md: 1.2-1.6 times the added mass)
     fit = summary["start_correction"]

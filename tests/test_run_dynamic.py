@@ -8,13 +8,14 @@ import signal
 import subprocess
 import sys
 import time
+from itertools import pairwise
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pytest
 
-from fsi_orchestrator.case import load_case
+from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.cli import run as run_cli
 from solid_adapter.build import run_static
 
@@ -170,3 +171,54 @@ def test_the_summary_says_when_the_last_period_is_not_periodic_yet(tmp_path, cap
     assert rest["tip_amplitude_change_last_period"] == pytest.approx(change, rel=1e-12)
     assert abs(change) > 0.01
     assert f"tail amplitude changed by {100 * change:+.1f} %" in out.err
+
+
+def test_a_run_ends_once_periodic_and_a_resume_with_a_tighter_tolerance_goes_on(tmp_path, capsys):
+    """time.periodic_tolerance: the beam started on its periodic orbit changes by < 1 % per
+    period, so at 1 % the run ends after three periods (the first with two changes to
+    compare), each recorded window the full run's; resumed with a tolerance it cannot meet it
+    goes on to time.periods and equals the uninterrupted run. Started at rest (changes of
+    several %), it runs all four periods."""
+    case = tmp_path / "beam"
+    case.mkdir()
+    (case / "case.toml").write_text(BEAM)
+    run = [str(case), "--json", "--quiet"]
+    assert run_cli.main([*run, "--output", str(tmp_path / "full")]) == 0
+    full = json.loads(capsys.readouterr().out)
+    a = full["tip_amplitude_per_period_m"]
+    changes = [abs(y - x) / y for x, y in pairwise(a)]
+    assert max(changes[:2]) < 0.01
+
+    short = [*run, "--output", str(tmp_path / "short"), "--set", "time.periodic_tolerance=0.01"]
+    assert run_cli.main(short) == 0
+    out = capsys.readouterr()
+    stopped = json.loads(out.out)
+    assert stopped["windows"] == 60
+    assert stopped["stopped_periodic"].startswith("periodic after 3 periods")
+    assert "note: periodic after 3 periods" in out.err
+    np.testing.assert_array_equal(stopped["tip_amplitude_per_period_m"], a[:3])
+
+    # resumed as it was: it stays ended
+    assert run_cli.main([*short, "--resume"]) == 0
+    assert json.loads(capsys.readouterr().out)["windows"] == 60
+    tighter = [*short[:-1], "time.periodic_tolerance=1e-12", "--resume"]
+    assert run_cli.main(tighter) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert resumed["windows"] == 80 and "stopped_periodic" not in resumed
+    with h5py.File(full["results"]) as f, h5py.File(resumed["results"]) as g:
+        np.testing.assert_allclose(
+            g["shell/tip_displacement_m"][:], f["shell/tip_displacement_m"][:], rtol=0, atol=1e-12
+        )
+
+    rest = [*run, "--output", str(tmp_path / "rest"), "--set", "time.start=rest"]
+    assert run_cli.main([*rest, "--set", "time.periodic_tolerance=0.01"]) == 0
+    assert json.loads(capsys.readouterr().out)["windows"] == 80
+
+
+def test_a_periodic_tolerance_without_periods_is_refused(tmp_path):
+    case = tmp_path / "beam"
+    case.mkdir()
+    (case / "case.toml").write_text(BEAM)
+    sets = ["time.step_s=0.001", "time.end_time_s=0.01", "time.periodic_tolerance=0.01"]
+    with pytest.raises(CaseError, match="time.periodic_tolerance counts periods of the drive"):
+        load_case(case, sets)

@@ -131,6 +131,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
     t = case.time
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")
+    if t.periodic_tolerance is not None and t.step_s is not None:
+        raise CaseError(
+            "time.periodic_tolerance counts periods of the drive (time.periods); a run given "
+            "by time.step_s / time.end_time_s has none: remove one or the other"
+        )
     c = case.coupling
     if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
         raise CaseError(

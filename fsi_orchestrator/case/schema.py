@@ -376,6 +376,16 @@ class Time:
     end_time_s: float | None = param(
         None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0
     )
+    periodic_tolerance: float | None = param(
+        None,
+        "dynamic with actuation: end the run at the end of a period once the tail amplitude "
+        "(and the mean thrust, where the fluid reports it) changed by less than this, "
+        "relative, over each of the last two periods; time.periods is then the most it runs. "
+        "For sweeps and design studies that want the periodic state, not a start-up "
+        "(docs/coupling.md).",
+        gt=0,
+        lt=1,
+    )
     start: StartMode = param(
         StartMode.PERIODIC,
         "dynamic with actuation: start on the linear periodic response (no start-up "

@@ -8,6 +8,7 @@ import sys
 import time
 from collections.abc import Sequence
 from contextlib import contextmanager
+from itertools import pairwise
 from pathlib import Path
 
 import h5py
@@ -16,7 +17,8 @@ import numpy as np
 from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..case.timing import case_schedule, windows_per_period
-from ..loop import OutputSettings, Schedule, WindowLoop
+from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
+from ..results import ResultsFile
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,
@@ -63,6 +65,45 @@ def complete_periods(values: np.ndarray, per_period: int) -> list[np.ndarray]:
     n = len(values) // per_period
     start = len(values) - n * per_period
     return [values[start + k * per_period : start + (k + 1) * per_period] for k in range(n)]
+
+
+def periodic_stop(case: Case) -> StopRule | None:
+    """``time.periodic_tolerance``: the run ends at the end of a period once the tail
+    amplitude, and the mean thrust where the fluid reports it, changed by less than the
+    tolerance (relative) over each of the last two periods. Two, because the start-up beats
+    with the damped wet first mode: one small change can be a crossing of the beat."""
+    tolerance, n = case.time.periodic_tolerance, windows_per_period(case)
+    if tolerance is None:
+        return None
+
+    def per_period(results: ResultsFile) -> dict[str, list[float]]:
+        tip = results.column("shell/tip_displacement_m")
+        series = {"tail amplitude": [np.ptp(p) / 2 for p in complete_periods(tip[:, 2], n)]}
+        thrust = results.column("fluid/thrust_n")
+        if thrust is not None:
+            series["mean thrust"] = [p.mean() for p in complete_periods(thrust[:, 0], n)]
+        return series
+
+    def rule(results: ResultsFile) -> str | None:
+        if results.rows == 0 or results.rows % n:
+            return None
+        changes = {}
+        for name, values in per_period(results).items():
+            if len(values) < 3:
+                return None
+            changes[name] = [abs(b - a) / abs(b) if b else np.inf for a, b in pairwise(values[-3:])]
+            if max(changes[name]) > tolerance:
+                return None
+        said = "; ".join(
+            f"the {name} changed by {100 * a:.2g} % and {100 * b:.2g} %"
+            for name, (a, b) in changes.items()
+        )
+        return (
+            f"periodic after {results.rows // n} periods (time.periodic_tolerance = "
+            f"{tolerance:g}): over the last two periods {said}"
+        )
+
+    return rule
 
 
 def dynamic_summary(case: Case, results_path: Path) -> dict:
@@ -121,7 +162,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
     start = time.perf_counter()
     try:
         with progress_bar(schedule.n_windows, show_progress) as progress:
-            loop = WindowLoop(solid, schedule, settings, progress, coupling)
+            loop = WindowLoop(solid, schedule, settings, progress, coupling, periodic_stop(case))
             path = loop.run(resume=resume)
     finally:
         if coupling is not None:
@@ -140,6 +181,9 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
         summary["thrust_source"] = "slender_body"
     summary["wall_s"] = time.perf_counter() - start
+    if loop.stopped is not None:
+        summary["stopped_periodic"] = loop.stopped
+        print(f"note: {loop.stopped}", file=sys.stderr)
     note = settling_note(summary)
     if note is not None:
         print(note, file=sys.stderr)
@@ -190,8 +234,17 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         timing = {
             "non_fluid_share": float(1 - fluid.sum() / wall.sum()),
             "last_period_non_fluid_share": float(1 - fluid[last].sum() / wall[last].sum()),
-            "last_period_wall_s_per_window": float(wall[last].mean()),
         }
+    # window 0's wall time holds the fluid-only lead-in: not a coupled window's cost
+    coupled_wall = wall.copy()
+    coupled_wall[0] -= min(coupling.lead_in_wall_s, coupled_wall[0])
+    timing["last_period_wall_s_per_window"] = float(coupled_wall[last].mean())
+    prescribed = coupling.prescribed_wall_s_per_window
+    if prescribed:  # the lead-in's windows are a prescribed-motion run of the same fluid
+        timing["prescribed_wall_s_per_window"] = prescribed
+        timing["last_period_wall_ratio_to_prescribed"] = float(
+            coupled_wall[last].mean() / prescribed
+        )
     start = {}
     if coupling.start_fit is not None:
         start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
