@@ -67,6 +67,15 @@ def complete_periods(values: np.ndarray, per_period: int) -> list[np.ndarray]:
     return [values[start + k * per_period : start + (k + 1) * per_period] for k in range(n)]
 
 
+def period_amplitudes(values: np.ndarray, per_period: int) -> list[float]:
+    """Half the peak-to-peak of each complete period, oldest first."""
+    return [float(np.ptp(p) / 2) for p in complete_periods(values, per_period)]
+
+
+def period_means(values: np.ndarray, per_period: int) -> list[float]:
+    return [float(p.mean()) for p in complete_periods(values, per_period)]
+
+
 def periodic_stop(case: Case) -> StopRule | None:
     """``time.periodic_tolerance``: the run ends at the end of a period once the tail
     amplitude, and the mean thrust where the fluid reports it, changed by less than the
@@ -78,10 +87,10 @@ def periodic_stop(case: Case) -> StopRule | None:
 
     def per_period(results: ResultsFile) -> dict[str, list[float]]:
         tip = results.column("shell/tip_displacement_m")
-        series = {"tail amplitude": [np.ptp(p) / 2 for p in complete_periods(tip[:, 2], n)]}
+        series = {"tail amplitude": period_amplitudes(tip[:, 2], n)}
         thrust = results.column("fluid/thrust_n")
         if thrust is not None:
-            series["mean thrust"] = [p.mean() for p in complete_periods(thrust[:, 0], n)]
+            series["mean thrust"] = period_means(thrust[:, 0], n)
         return series
 
     def rule(results: ResultsFile) -> str | None:
@@ -114,7 +123,7 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
         wall = h5["wall_s"][:, 0]
     z, per_period = tip[:, 2], windows_per_period(case)
     last = z[-min(len(z), per_period) :]  # a run shorter than a period: all of it
-    amplitudes = [float(np.ptp(period) / 2) for period in complete_periods(z, per_period)]
+    amplitudes = period_amplitudes(z, per_period)
     change = {}
     if len(amplitudes) >= 2 and amplitudes[-1] > 0:
         change = {
@@ -279,10 +288,9 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
             # about the vertical (y) axis through the nose, right-handed
             "mean_yaw_moment_nm": float(moment[last, 1].mean()),
         }
-    periods = complete_periods(thrust, windows_per_period(case))
     return {
         "mean_thrust_n": float(thrust[last].mean()),
-        "mean_thrust_per_period_n": [float(p.mean()) for p in periods],
+        "mean_thrust_per_period_n": period_means(thrust, windows_per_period(case)),
         "lateral_force_amplitude_n": float(np.ptp(force[last, 2]) / 2),
         **turning,
     }
