@@ -17,6 +17,7 @@ import pytest
 
 from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.cli import run as run_cli
+from fsi_orchestrator.results import ResultsFile
 from solid_adapter.build import run_static
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -222,3 +223,27 @@ def test_a_periodic_tolerance_without_periods_is_refused(tmp_path):
     sets = ["time.step_s=0.001", "time.end_time_s=0.01", "time.periodic_tolerance=0.01"]
     with pytest.raises(CaseError, match="time.periodic_tolerance counts periods of the drive"):
         load_case(case, sets)
+
+
+def test_a_run_does_not_end_as_periodic_during_its_explicit_start_up(tmp_path):
+    """With coupling.explicit_periods = 3 the periodic stop waits for an iterated period: a
+    synthetic history that repeats exactly (changes 0) ends the run after period 4, not 3."""
+    sets = [
+        "coupling.explicit_periods=3",
+        "time.periods=6",
+        "time.steps_per_period=8",
+        "time.periodic_tolerance=0.01",
+    ]
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", sets)
+    rule = run_cli.periodic_stop(case)
+    t = np.arange(48) / 24.0
+    results = ResultsFile(tmp_path / "results.h5")
+    said = []
+    for k in range(48):
+        tip = [0.0, 0.0, 0.008 * np.sin(2 * np.pi * 3 * t[k])]
+        results.append({"shell/tip_displacement_m": tip, "fluid/thrust_n": 0.013})
+        said.append(rule(results))
+    results.close()
+    ended = [k + 1 for k, why in enumerate(said) if why is not None]
+    assert ended[0] == 32
+    assert said[31].startswith("periodic after 4 periods (time.periodic_tolerance = 0.01)")

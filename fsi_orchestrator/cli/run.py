@@ -80,10 +80,13 @@ def periodic_stop(case: Case) -> StopRule | None:
     """``time.periodic_tolerance``: the run ends at the end of a period once the tail
     amplitude, and the mean thrust where the fluid reports it, changed by less than the
     tolerance (relative) over each of the last two periods. Two, because the start-up beats
-    with the damped wet first mode: one small change can be a crossing of the beat."""
+    with the damped wet first mode: one small change can be a crossing of the beat. Not
+    before an explicit start-up (``coupling.explicit_periods``) is over: the figures a run
+    ends with are those of iterated windows."""
     tolerance, n = case.time.periodic_tolerance, windows_per_period(case)
     if tolerance is None:
         return None
+    first = (case.coupling.explicit_periods + 1) * n if is_coupled(case) else 0
 
     def per_period(results: ResultsFile) -> dict[str, list[float]]:
         tip = results.column("shell/tip_displacement_m")
@@ -94,7 +97,7 @@ def periodic_stop(case: Case) -> StopRule | None:
         return series
 
     def rule(results: ResultsFile) -> str | None:
-        if results.rows == 0 or results.rows % n:
+        if results.rows == 0 or results.rows % n or results.rows < first:
             return None
         changes = {}
         for name, values in per_period(results).items():
