@@ -195,10 +195,12 @@ class Coupling:
         if n <= 0 or omega <= 0:
             return
         start = time.perf_counter()
-        self._lead_in(solid, dt, n, omega)
+        periods = self._lead_in(solid, dt, n, omega)
         self.lead_in_wall_s = time.perf_counter() - start
+        self.prescribed_wall_s_per_window = self.fluid_wall_s / (periods * n)
 
-    def _lead_in(self, solid: Participant, dt: float, n: int, omega: float) -> None:
+    def _lead_in(self, solid: Participant, dt: float, n: int, omega: float) -> int:
+        """The lead-in's periods of prescribed motion; returns how many it took."""
         old = _periodic_motion(solid, omega)
         times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
@@ -209,8 +211,7 @@ class Coupling:
         if self.start_orbit is None:
             self._follow(ramped, times, dt)
             self._initialize_data(solid, ramped, dt)
-            self.prescribed_wall_s_per_window = self.fluid_wall_s / n
-            return
+            return 1
         # near the fast model's (undamped) wet resonance its orbit is unbounded; the fit needs
         # only some motion along it, so the first period is capped at the amplitude the mesh
         # motion is checked for (issue 4: +-40 mm at the tail) and at a speed the CFD resolves
@@ -240,7 +241,7 @@ class Coupling:
 
         self._follow(blended, times, dt)
         self._initialize_data(solid, blended, dt)
-        self.prescribed_wall_s_per_window = self.fluid_wall_s / (2 * n)
+        return 2
 
     def _initialize_data(self, solid: Participant, motion, dt: float) -> None:
         """The lead-in's last fluid solve ends at t = 0 with the structure's motion there: its

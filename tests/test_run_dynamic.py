@@ -88,14 +88,20 @@ checkpoint_every = 5
 """
 
 
+def beam_case(folder: Path) -> Path:
+    """A case folder holding the BEAM case."""
+    folder.mkdir()
+    (folder / "case.toml").write_text(BEAM)
+    return folder
+
+
 def test_killed_run_resumes_to_the_same_result(tmp_path):
     """kill -9 mid-run of the piezo-driven beam, then --resume: the same history as an
     uninterrupted run."""
     env = {**os.environ, "PYTHONHASHSEED": "0"}
     ref_case, case = tmp_path / "a", tmp_path / "b"
     for folder in (ref_case, case):
-        folder.mkdir()
-        (folder / "case.toml").write_text(BEAM)
+        beam_case(folder)
     cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
     subprocess.run([*cmd, str(ref_case)], check=True, capture_output=True, env=env)
     proc = subprocess.Popen(
@@ -150,9 +156,7 @@ def test_the_summary_says_when_the_last_period_is_not_periodic_yet(tmp_path, cap
     """Per-period tail amplitudes (exactly the half peak-to-peak of each period in
     results.h5) and their change over the last period; a run that started on its periodic
     orbit is periodic (change < 1 %, no note), one started from rest is not, and stderr says so."""
-    case = tmp_path / "beam"
-    case.mkdir()
-    (case / "case.toml").write_text(BEAM)
+    case = beam_case(tmp_path / "beam")
     assert run_cli.main([str(case), "--json", "--quiet", "--output", str(tmp_path / "p")]) == 0
     out = capsys.readouterr()
     periodic = json.loads(out.out)
@@ -180,9 +184,7 @@ def test_a_run_ends_once_periodic_and_a_resume_with_a_tighter_tolerance_goes_on(
     compare), each recorded window the full run's; resumed with a tolerance it cannot meet it
     goes on to time.periods and equals the uninterrupted run. Started at rest (changes of
     several %), it runs all four periods."""
-    case = tmp_path / "beam"
-    case.mkdir()
-    (case / "case.toml").write_text(BEAM)
+    case = beam_case(tmp_path / "beam")
     run = [str(case), "--json", "--quiet"]
     assert run_cli.main([*run, "--output", str(tmp_path / "full")]) == 0
     full = json.loads(capsys.readouterr().out)
@@ -217,9 +219,7 @@ def test_a_run_ends_once_periodic_and_a_resume_with_a_tighter_tolerance_goes_on(
 
 
 def test_a_periodic_tolerance_without_periods_is_refused(tmp_path):
-    case = tmp_path / "beam"
-    case.mkdir()
-    (case / "case.toml").write_text(BEAM)
+    case = beam_case(tmp_path / "beam")
     sets = ["time.step_s=0.001", "time.end_time_s=0.01", "time.periodic_tolerance=0.01"]
     with pytest.raises(CaseError, match="time.periodic_tolerance counts periods of the drive"):
         load_case(case, sets)
