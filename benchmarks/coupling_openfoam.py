@@ -5,10 +5,16 @@ tightly converged reference run.
 
 All runs share one generated mesh (copied), the same fluid-only lead-in onto the periodic orbit
 (timed separately: it *is* a prescribed-motion run of the same windows, one fluid solve each),
-then ``--windows`` coupled windows at 3 Hz.
+then ``--windows`` coupled windows at 3 Hz: the start-up, where the flow is still developing.
+
+``--from-run DIR`` starts every scheme instead from the checkpoint of a finished ``fsi-run``
+of this case (its output folder, run at the same ``--level`` and ``--mesh-scale``), e.g. one
+run on to its periodic state; each scheme goes on from a copy of its OpenFOAM case. The
+prescribed-motion cost is then that run's lead-in's, and a scheme other than the run's starts
+its accelerator afresh (``fsi-run --resume`` with another ``coupling.scheme`` does the same).
 
     .venv/bin/python benchmarks/coupling_openfoam.py [--level coarse] [--mesh-scale 1.5]
-        [--windows 10] [--schemes iqn-ils-am,explicit-am,...] [--json]
+        [--windows 10] [--schemes iqn-ils-am,explicit-am,...] [--from-run DIR] [--json]
 """
 
 from __future__ import annotations
@@ -28,6 +34,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
 from fsi_orchestrator.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
 from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
+from fsi_orchestrator.loop import load_checkpoint  # noqa: E402
+from fsi_orchestrator.results import CHECKPOINT_FILE  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # scheme -> extra case overrides; "reference" is the tightly converged run
@@ -61,11 +69,18 @@ RUNS = {
 }
 
 
-def one_run(name: str, overrides: list[str], windows: int, folder: Path) -> dict:
+def one_run(
+    name: str, overrides: list[str], windows: int, folder: Path, start: Path | None = None
+) -> dict:
+    """``windows`` coupled windows after the lead-in, or after the checkpoint ``start``."""
     case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides + RUNS[name])
     solid, coupling = coupled_setup(case, openfoam_fluid_factory(folder, fresh=False))
     fluid, dt = coupling.fluid, 1.0 / (case.actuation.frequency_hz * case.time.steps_per_period)
-    coupling.lead_in(solid, dt)  # prescribed motion: the fluid's cost per window alone
+    first = 1  # window 0 would hold the lead-in, done here apart
+    if start is None:
+        coupling.lead_in(solid, dt)  # prescribed motion: the fluid's cost per window alone
+    else:
+        first = load_checkpoint(start, solid, coupling)
     prescribed_s = coupling.prescribed_wall_s_per_window
     fluid_time = 0.0
     solves, tips, forces = [], [], []
@@ -73,7 +88,7 @@ def one_run(name: str, overrides: list[str], windows: int, folder: Path) -> dict
     status = "ok"
     try:
         for w in range(windows):
-            stats = coupling.solve_window(solid, dt, w + 1)  # lead-in done above
+            stats = coupling.solve_window(solid, dt, first + w)
             solves.append(stats["coupling/fluid_solves"])
             fluid_time += stats["coupling/fluid_wall_s"]
             tips.append(solid.monitor()["tip_displacement_m"][2])
@@ -103,20 +118,25 @@ def main() -> None:
     ap.add_argument("--mesh-scale", type=float, default=1.5)
     ap.add_argument("--windows", type=int, default=10)
     ap.add_argument("--schemes", default=",".join(RUNS))
+    ap.add_argument("--from-run", type=Path, help="start from this fsi-run output's checkpoint")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     overrides = [f"fluid.mesh_level={args.level}", f"fluid.mesh_scale={args.mesh_scale}"]
     base = Path(tempfile.mkdtemp(prefix="fishfsi-bench-"))
     base.chmod(0o755)
-    template = base / "template"
-    # generate the mesh once (a throw-away build), then copy it per run
-    case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides)
-    openfoam_fluid_factory(template, fresh=True)(case, None).finalize()
+    start = None
+    if args.from_run is not None:
+        template, start = args.from_run / "openfoam", args.from_run / CHECKPOINT_FILE
+    else:  # generate the mesh once (a throw-away build), then copy it per run
+        template = base / "template"
+        case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides)
+        openfoam_fluid_factory(template, fresh=True)(case, None).finalize()
     rows = []
     for name in args.schemes.split(","):
         folder = base / name
-        shutil.copytree(template, folder, symlinks=True)
-        rows.append(one_run(name, overrides, args.windows, folder))
+        # (a killed run may have left the persistent driver's named pipes behind)
+        shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
+        rows.append(one_run(name, overrides, args.windows, folder, start))
         r = rows[-1]
         print(
             f"{name:20s} {r['status']:24s} solves/window {r['mean_solves']:5.2f}  "

@@ -10,8 +10,6 @@ from .potential import build_added_mass
 from .potential.model import AddedMass
 from .strip import strip_added_mass
 
-FAST_MODELS = (FluidModel.POTENTIAL, FluidModel.SLENDER_BODY)
-
 
 def fast_added_mass(case: Case, shell_model) -> AddedMass | None:
     """The case's added-mass operator on the shell's nodal normal accelerations, or None."""

@@ -36,8 +36,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .acceleration import make_acceleration
-from .acceleration.iqn_ils import IQNILSSettings
-from .acceleration.iqn_imvj import IQNIMVJAcceleration
 from .convergence import (
     ConvergenceCriteria,
     CouplingDivergenceError,
@@ -115,7 +113,7 @@ def _make_accelerator(settings: CouplingSettings):
     # keeps all past windows in a Jacobian (IMVJ); "iqn-imvj" without the added-mass
     # preconditioning is for participants without a fast fluid model (the Turek & Hron flag)
     if settings.scheme in ("iqn-ils-am", "iqn-imvj"):
-        return IQNIMVJAcceleration(IQNILSSettings(initial_relaxation=settings.relaxation))
+        return make_acceleration("iqn-imvj", initial_relaxation=settings.relaxation)
     if settings.scheme == "constant":
         return make_acceleration("constant", relaxation=settings.relaxation)
     if settings.scheme == "aitken":
@@ -158,16 +156,17 @@ class Coupling:
             {FIELD: [self.measure]},
             max_iterations=settings.max_iterations if settings.implicit else 1,
         )
-        self.unconverged_windows = 0
         self.norms: list[float] = []
         # the tolerance refers to the fluid force's size over the last windows: its norm passes
         # through zero twice a period, where a purely instantaneous reference would be harsh
-        self.force_scales: list[float] = []
+        self.force_scales: list[float] = []  # the fluid force's norm at past window ends
+        self._force_norm = 0.0  # ... and at the last iteration
         self.fluid_wall_s = 0.0  # inside the fluid's solve / follow in the current window
         # the lead-in's prescribed-motion windows (one fluid step each): the fluid's wall time
         # per window, the denominator of the coupled / prescribed-motion cost ratio
         self.prescribed_wall_s_per_window: float | None = None
         self.lead_in_wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
+        self.resumed_from_scheme: str | None = None  # a resumed run's former coupling.scheme
 
     def _in_fluid(self, call, *args):
         """``call(*args)``, its wall time counted as the fluid's (results.h5
@@ -266,12 +265,18 @@ class Coupling:
                     sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
                 )
             initialize(history)
-        x0 = self.mapping.conservative(self.fluid.write_data()[FORCE])
-        if self.added_mass_z is not None:
-            x0[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
+        x0 = self._exchanged_force(solid)
         if initialize is not None:
             initialize({FORCE: x0})
         self.predictor.record(solid.time, {FIELD: x0})
+
+    def _exchanged_force(self, solid: Participant) -> NDArray:
+        """The exchanged variable of the fluid's last force and the structure's present motion:
+        f, or g = f + M~ a for an *-am scheme."""
+        x = self.mapping.conservative(self.fluid.write_data()[FORCE])
+        if self.added_mass_z is not None:
+            x[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
+        return x
 
     def _follow(
         self, motion, times: list[float], dt: float, record_from: float | None = None
@@ -335,13 +340,11 @@ class Coupling:
             x = self.accelerator.perform({FIELD: x}, {FIELD: x_tilde})[FIELD]
             solid.restore_checkpoint()
             self.fluid.restore_checkpoint()
-        if status is WindowStatus.MAX_ITERATIONS and iterate:
-            self.unconverged_windows += 1
         if self.accelerator is not None and iterate:
             self.accelerator.iterations_converged({FIELD: x}, {FIELD: x_tilde})
         self.predictor.record(t_end, {FIELD: x_tilde})
         self._check_growth(float(np.linalg.norm(x_tilde)), window)
-        self.force_scales = (self.force_scales + [self.measure.scale])[-SCALE_MEMORY:]
+        self.force_scales = (self.force_scales + [self._force_norm])[-SCALE_MEMORY:]
         return {
             "coupling/fluid_solves": float(self.criteria.iteration + self.retries),
             "coupling/converged": float(status is WindowStatus.CONVERGED),
@@ -396,10 +399,10 @@ class Coupling:
             )
 
     def _hint(self) -> str:
-        return (
-            f'(coupling.scheme = "{self.settings.scheme}"). The liquid is far denser than '
-            'the plate: use "iqn-ils-am" or "explicit-am", or a smaller '
-            "coupling.relaxation."
+        return f'(coupling.scheme = "{self.settings.scheme}"). The liquid is far denser than ' + (
+            "the plate: a smaller coupling.relaxation or a shorter time step may help."
+            if self.settings.uses_added_mass
+            else 'the plate: use "iqn-ils-am" or "explicit-am", or a smaller coupling.relaxation.'
         )
 
     def _first_iterate(self, t_end: float) -> NDArray:
@@ -414,7 +417,8 @@ class Coupling:
         self.fluid.read_data({k: self.mapping.consistent(v) for k, v in motion.items()})
         self._in_fluid(self.fluid.solve, dt)
         force = self.mapping.conservative(self.fluid.write_data()[FORCE])
-        self.measure.scale = max([float(np.linalg.norm(force)), *self.force_scales])
+        self._force_norm = float(np.linalg.norm(force))
+        self.measure.scale = max([self._force_norm, *self.force_scales])
         if self.added_mass_z is not None:
             force[:, 2] += self.added_mass_z @ motion[ACCELERATION][:, 2]
         return force
@@ -422,7 +426,7 @@ class Coupling:
     # ------------------------------------------------------------------ restart
     def save_state(self) -> dict:
         return {
-            "unconverged_windows": self.unconverged_windows,
+            "scheme": np.bytes_(str(self.settings.scheme)),
             "force_scales": np.array(self.force_scales),
             "norms": np.array(self.norms),
             "prescribed_wall_s_per_window": self.prescribed_wall_s_per_window or np.nan,
@@ -432,17 +436,30 @@ class Coupling:
             "fluid": self.fluid.save_state(),
         }
 
-    def load_state(self, state) -> None:
-        self.unconverged_windows = int(state["unconverged_windows"])
+    def load_state(self, state, solid: Participant) -> None:
+        """Continue from :meth:`save_state` (``solid`` already restored). A run saved with
+        another coupling.scheme goes on with this one: its accelerator starts afresh, and
+        between a plain and an *-am scheme (f against g = f + M~ a exchanged) the predictor and
+        the structure's load restart from the last window's value in this scheme's variable."""
+        saved = state.get("scheme", str(self.settings.scheme).encode())  # older runs: none
+        saved = saved.decode() if isinstance(saved, bytes) else str(saved)
+        self.resumed_from_scheme = None if saved == self.settings.scheme else saved
         self.force_scales = [float(v) for v in np.atleast_1d(state["force_scales"])]
         self.norms = [float(v) for v in np.atleast_1d(state["norms"])]
         prescribed = float(state.get("prescribed_wall_s_per_window", np.nan))  # older runs: none
         self.prescribed_wall_s_per_window = None if np.isnan(prescribed) else prescribed
         self.lead_in_wall_s = float(state.get("lead_in_wall_s", 0.0))
         self.predictor.load_state(state["predictor"])
-        if self.accelerator is not None:
-            self.accelerator.load_state(state["accelerator"])
         self.fluid.load_state(state["fluid"])
+        if self.resumed_from_scheme is None:
+            if self.accelerator is not None:
+                self.accelerator.load_state(state["accelerator"])
+        elif (saved in ADDED_MASS) != self.settings.uses_added_mass:
+            x = self._exchanged_force(solid)
+            initialize = getattr(solid, "initialize_data", None)
+            if initialize is not None:
+                initialize({FORCE: x})
+            self.predictor.restart(solid.time, {FIELD: x})
 
 
 def peak_speed(motion, times: list[float]) -> float:

@@ -24,6 +24,7 @@ from .results import (
     ResultsFile,
     VtkSeries,
     read_checkpoint,
+    stored_rows,
     write_checkpoint,
 )
 
@@ -36,7 +37,6 @@ class ResumeError(RuntimeError):
 class Schedule:
     dt: float
     n_windows: int
-    t0: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -94,6 +94,7 @@ class WindowLoop:
         out.mkdir(parents=True, exist_ok=True)
         if resume:
             self._resume(out / CHECKPOINT_FILE)
+            _check_results_reach(out / RESULTS_FILE, self.window)
         results = ResultsFile(out / RESULTS_FILE, resume_rows=self.window if resume else None)
         results.set_attributes(self.output.attributes)
         vtk = self._vtk_writers(out / "vtk", keep_until=self.solid.time if resume else None)
@@ -179,20 +180,52 @@ class WindowLoop:
 
     # ----------------------------------------------------------------- checkpoints
     def _checkpoint(self, path: Path) -> None:
-        loop_state: dict = {"window": self.window}
+        loop_state: dict = {"window": self.window, "dt_s": self.schedule.dt}
         if self.coupling is not None:
             loop_state["coupling"] = self.coupling.save_state()
         write_checkpoint(path, loop_state, {self.solid.name: self.solid.save_state()})
 
     def _resume(self, path: Path) -> None:
-        if not path.exists():
-            raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
-        loop_state, states = read_checkpoint(path)
-        self.window = int(loop_state["window"])
-        if self.solid.name not in states:
-            raise ResumeError(f"{path}: holds no state for participant '{self.solid.name}'")
-        self.solid.load_state(states[self.solid.name])
-        if self.coupling is not None:
-            if "coupling" not in loop_state:
-                raise ResumeError(f"{path}: was written by an uncoupled run")
-            self.coupling.load_state(loop_state["coupling"])
+        self.window = load_checkpoint(path, self.solid, self.coupling, self.schedule.dt)
+
+
+def load_checkpoint(
+    path: Path, solid: Participant, coupling: Coupling | None, dt: float | None = None
+) -> int:
+    """Restore the structure and the coupling (with its fluid) from a checkpoint written
+    with windows of ``dt`` (None: any); returns the number of windows it had done."""
+    if not path.exists():
+        raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
+    loop_state, states = read_checkpoint(path)
+    changed = "run without --resume, or resume with the settings it was written with"
+    saved_dt = float(loop_state.get("dt_s", np.nan))  # older checkpoints: not saved
+    if dt is not None and abs(saved_dt - dt) > 1e-9 * dt:
+        raise ResumeError(
+            f"{path}: was written with windows of {saved_dt:.6g} s, this case has {dt:.6g} s "
+            "(actuation.frequency_hz, time.steps_per_period or time.step_s changed); "
+            f"{changed}"
+        )
+    if solid.name not in states:
+        raise ResumeError(f"{path}: holds no state for participant '{solid.name}'; {changed}")
+    if coupling is not None and "coupling" not in loop_state:
+        raise ResumeError(f"{path}: was written by an uncoupled run; {changed}")
+    try:
+        solid.load_state(states[solid.name])
+        if coupling is not None:
+            coupling.load_state(loop_state["coupling"], solid)
+    except (KeyError, ValueError, IndexError) as err:  # another mesh, fluid or model
+        raise ResumeError(
+            f"{path}: does not fit this case ({err}): the case changed since it was written; "
+            f"{changed}"
+        ) from err
+    return int(loop_state["window"])
+
+
+def _check_results_reach(path: Path, windows: int) -> None:
+    """The results a resumed run appends to must hold every window the checkpoint did."""
+    rows = stored_rows(path)
+    if rows < windows:
+        raise ResumeError(
+            f"{path}: holds {rows} windows, the checkpoint {windows}: the run's results are "
+            "incomplete, so it cannot go on from there; run without --resume"
+        )

@@ -139,6 +139,12 @@ class Predictor:
             keep = max(keep, sum(t >= self._times[-1] - span for t in self._times))
         self._times, self._values = self._times[-keep:], self._values[-keep:]
 
+    def restart(self, time: float, values: Mapping[str, NDArray]) -> None:
+        """Forget the history (it holds another variable) and start from ``values``."""
+        self._times, self._values = [], []
+        self.all_rule_errors = np.full(len(ALL_RULES), np.inf)
+        self.record(time, values)
+
     def predict(self, time: float) -> Values:
         """First iterate for the window ending at ``time``."""
         if not self._times:

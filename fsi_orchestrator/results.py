@@ -25,6 +25,14 @@ RESULTS_FILE = "results.h5"
 CHECKPOINT_FILE = "checkpoint.h5"
 
 
+def stored_rows(path: Path) -> int:
+    """How many windows a results file holds (0: none, or no file)."""
+    if not path.exists():
+        return 0
+    with h5py.File(path, "r") as h5:
+        return int(h5["time_s"].shape[0]) if "time_s" in h5 else 0
+
+
 class ResultsFile:
     """Append-only table of per-window quantities, grouped by participant name."""
 

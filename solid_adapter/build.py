@@ -18,7 +18,6 @@ from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
 from .shell import NDOF, ShellModel
 from .solvers import (
-    ModalResult,
     NewtonSettings,
     RayleighDamping,
     TimeIntegrator,
@@ -255,8 +254,3 @@ def run_static(case: Case, model: ShellModel | None = None) -> StaticResult:
     return StaticResult(
         x=x, tip_displacement_m=x.reshape(-1, NDOF)[tip, :3].copy(), history=np.array(history)
     )
-
-
-def run_dry_modal(case: Case, model: ShellModel | None = None) -> ModalResult:
-    model = model or build_shell_model(case)
-    return modal_analysis(model, case.analysis.num_modes)

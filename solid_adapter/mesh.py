@@ -95,10 +95,6 @@ class PlateMesh:
             w[k : k + 3] += (y[k + 2] - y[k]) * np.array([1.0, 4.0, 1.0]) / 6.0
         return idx, w / w.sum()
 
-    def to_quad9_cells(self) -> NDArray:
-        """Connectivity in VTK/meshio ``quad9`` order (corners, edge mids, centre)."""
-        return self.element_nodes
-
 
 def element_columns(layout: PlateLayout, n_target: int) -> NDArray:
     """x coordinates of element columns with edges at every layout breakpoint."""

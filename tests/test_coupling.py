@@ -222,3 +222,72 @@ def test_a_warm_started_run_reruns_in_its_own_folder_and_resumes_without_the_sou
     fsi_run("warm", 1, "--set", "coupling.jacobian_from=output", "--resume")
     with h5py.File(tmp_path / "warm" / "results.h5") as h5:
         assert h5["time_s"].shape == (20, 1)
+
+
+@pytest.mark.slow
+def test_a_run_resumed_with_another_scheme_goes_on_from_where_it_stopped(tmp_path):
+    """--resume with another coupling.scheme: the saved state goes on under the new scheme.
+    From iqn-ils-am (g = f + M~ a exchanged) to plain IQN-ILS (f) the predictor and the
+    structure's load restart from the last window's f, so both tightly converged halves
+    continue the uninterrupted iqn-ils-am run to 1e-6; an explicit-am start-up continued with
+    iqn-ils-am is iterated from there on (the summary counts its explicit windows)."""
+    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    (tmp_path / "case.toml").write_text(BEAM)
+    tight = ["--set", "coupling.tolerance_rel=1e-8", "--set", "coupling.max_iterations=100"]
+
+    def fsi_run(output: str, *extra: str) -> tuple[dict, str, dict]:
+        args = [*cmd, str(tmp_path), "--output", str(tmp_path / output), *extra]
+        done = subprocess.run(args, capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        with h5py.File(tmp_path / output / "results.h5") as h5:
+            keys = ("shell/tip_displacement_m", "coupling/fluid_solves", "coupling/iterated")
+            rows = {k: h5[k][:, 0] for k in keys}
+        return json.loads(done.stdout), done.stderr, rows
+
+    ref, _, ref_rows = fsi_run("ref", *tight)
+    half = ["--set", "time.periods=0.5"]
+    first, _, _ = fsi_run("plain", *tight, *half)
+    assert "resumed_from_scheme" not in first
+    plain, note, rows = fsi_run("plain", *tight, "--set", "coupling.scheme=iqn-ils", "--resume")
+    assert plain["resumed_from_scheme"] == "iqn-ils-am" and plain["coupling_scheme"] == "iqn-ils"
+    assert 'coupling.scheme = "iqn-ils-am" and went on with "iqn-ils"' in note
+    assert plain["unconverged_windows"] == ref["unconverged_windows"] == 0
+    tip, ref_tip = rows["shell/tip_displacement_m"], ref_rows["shell/tip_displacement_m"]
+    assert tip.shape == ref_tip.shape == (20,)
+    np.testing.assert_allclose(tip, ref_tip, rtol=0, atol=1e-6 * np.abs(ref_tip).max())
+    assert rows["coupling/fluid_solves"][10:].mean() > ref_rows["coupling/fluid_solves"][10:].mean()
+
+    fsi_run("started", "--set", "coupling.scheme=explicit-am", *half)
+    started, _, rows = fsi_run("started", "--resume")
+    assert started["resumed_from_scheme"] == "explicit-am"
+    assert started["explicit_windows"] == 10 and started["unconverged_windows"] == 0
+    assert rows["coupling/iterated"].tolist() == [0.0] * 10 + [1.0] * 10
+
+
+def test_a_resume_that_does_not_fit_the_case_is_refused_in_one_line(tmp_path):
+    """--resume after the case changed (another shell mesh, another time step) or with the
+    results file gone stops with one line naming the file and what to do, before anything is
+    overwritten."""
+    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    (tmp_path / "case.toml").write_text(BEAM)
+    half = ["--set", "time.periods=0.5"]
+    assert subprocess.run([*cmd, str(tmp_path), *half], capture_output=True).returncode == 0
+    checkpoint, results = (tmp_path / "output" / f for f in ("checkpoint.h5", "results.h5"))
+    before = results.read_bytes()
+    for extra, expected in (
+        (["--set", "mesh.level=default"], f"{checkpoint}: does not fit this case ("),
+        (
+            ["--set", "actuation.frequency_hz=4"],
+            f"{checkpoint}: was written with windows of 0.01 s, this case has 0.0125 s",
+        ),
+        ([], f"{results}: holds 0 windows, the checkpoint 10"),
+    ):
+        if not extra:
+            results.unlink()
+        args = [*cmd, str(tmp_path), "--resume", *extra]
+        done = subprocess.run(args, capture_output=True, text=True)
+        line = done.stderr.strip()
+        assert done.returncode == 1 and line.startswith(f"error: {expected}"), done.stderr
+        assert "\n" not in line and "run without --resume" in line
+        if extra:
+            assert results.read_bytes() == before

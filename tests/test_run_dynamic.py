@@ -247,3 +247,19 @@ def test_a_run_does_not_end_as_periodic_during_its_explicit_start_up(tmp_path):
     ended = [k + 1 for k, why in enumerate(said) if why is not None]
     assert ended[0] == 32
     assert said[31].startswith("periodic after 4 periods (time.periodic_tolerance = 0.01)")
+
+
+def test_an_output_folder_that_cannot_be_used_is_refused_before_the_set_up(tmp_path, capsys):
+    """--output naming a file, or --resume where no checkpoint is: one line, before the
+    structure (and any fluid) is built."""
+    case = beam_case(tmp_path / "case")
+    (tmp_path / "a_file").write_text("")
+    assert run_cli.main([str(case), "--output", str(tmp_path / "a_file"), "--quiet"]) == 2
+    assert run_cli.main([str(case), "--output", str(tmp_path / "new"), "--resume"]) == 1
+    assert list((tmp_path / "new").iterdir()) == []  # nothing was run or written
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [
+        f"error: --output {tmp_path / 'a_file'}: cannot write there (File exists)",
+        f"error: {tmp_path / 'new' / 'checkpoint.h5'}: no checkpoint to resume from "
+        "(run without --resume)",
+    ]

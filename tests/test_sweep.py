@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsi_orchestrator.case import load_case
+from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.case.schema import Waveform
 from fsi_orchestrator.cli import post as post_cli
 from fsi_orchestrator.cli import run as run_cli
@@ -109,9 +109,33 @@ def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, mo
     assert len(list(csv.DictReader(open(out / "sweep.csv")))) == 3
 
 
+def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatch):
+    """A point that started from rest (near a wet resonance) is reported as such and the
+    sweep still exits 0."""
+    from fsi_orchestrator.cli import run as run_cli
+
+    real = run_cli.run_dynamic
+
+    def from_rest(case, output, **kwargs):
+        return {**real(case, output, **kwargs), "start_from_rest": "note: started from rest"}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", from_rest)
+    args = [str(CASE), "--frequencies", "8", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
+    assert sweep_cli.main([*args, "--json", "--output", str(tmp_path / "sweep")]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["status"] for r in rows] == ["ok (started from rest)"]
+
+
 @pytest.mark.parametrize("text, expected", [("1:5:2", [1.0, 3.0, 5.0]), ("3,10", [3.0, 10.0])])
 def test_frequency_lists(text, expected):
     assert sweep_cli.parse_frequencies(text) == pytest.approx(expected)
+
+
+@pytest.mark.parametrize("text", ["0,3", "3,-1", "1:5:0", "1:5:-1", "nan", "3;5"])
+def test_a_bad_frequency_list_is_refused_in_one_line(text):
+    with pytest.raises(CaseError, match=r"--frequencies .*: use start:stop:step or a,b,c"):
+        sweep_cli.parse_frequencies(text)
 
 
 def test_the_linear_sweep_oscillates_about_the_mean_voltage_equilibrium(tmp_path):
@@ -160,3 +184,11 @@ def test_each_transient_point_starts_from_the_jacobian_the_last_one_learned(tmp_
     assert sweep_cli.chained(own, tmp_path / "sine_3Hz") is own
     potential = load_case(ROOT / "cases/fixed_head_3Hz", ["fluid.model=potential"])
     assert sweep_cli.chained(potential, tmp_path / "sine_3Hz") is potential
+
+
+@pytest.mark.parametrize("name, text", [("sweep.csv", "a,b\n1,2\n"), ("results.h5", "x\n")])
+def test_fsi_post_refuses_a_file_it_did_not_write_in_one_line(tmp_path, capsys, name, text):
+    (tmp_path / name).write_text(text)
+    assert post_cli.main([str(tmp_path / name)]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and line.startswith(f"error: {tmp_path / name}: not a table")

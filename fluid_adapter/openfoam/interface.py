@@ -35,16 +35,8 @@ class FluidInterface:
     def faces(self) -> NDArray[np.int64]:
         return np.concatenate([p.faces for p in self.patches])
 
-    @property
-    def n_faces(self) -> int:
-        return sum(len(p.faces) for p in self.patches)
-
     def patch(self, name: str) -> PatchGeometry:
         return next(p for p in self.patches if p.name == name)
-
-    def patch_values(self, name: str, point_values: NDArray) -> NDArray:
-        """Interface point values in the patch's own point order (for a point patch field)."""
-        return np.ascontiguousarray(point_values[self.patch(name).local_points])
 
     def face_centres(self, displacement: NDArray | None = None) -> NDArray:
         pts = self.points0 if displacement is None else self.points0 + displacement

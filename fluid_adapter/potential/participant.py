@@ -96,12 +96,14 @@ class PotentialParticipant:
         self._past = self._saved_past.copy()
 
     def save_state(self) -> dict[str, NDArray | float | int]:
-        return {"time": self._time, "past": self._past.copy()}
+        return {"time": self._time, "past": self._past.copy(), "force": self._force.copy()}
 
     def load_state(self, state: State) -> None:
         self._time = float(state["time"])
         if "past" in state:
             self._past = np.array(state["past"], dtype=float)
+        if "force" in state:  # older checkpoints: none (the force of the next solve on)
+            self._force = np.array(state["force"], dtype=float)
 
     def finalize(self) -> None:
         pass

@@ -2,7 +2,8 @@
 
 ``base``: abstract :class:`Acceleration` and :func:`apply_relaxation`; ``constant``: constant
 under-relaxation; ``aitken``: Aitken dynamic relaxation; ``quasi_newton``: V/W bookkeeping,
-filtering and reuse; ``iqn_ils``: the IQN-ILS update. Pure numpy/scipy.
+filtering and reuse; ``iqn_ils``: the IQN-ILS update; ``iqn_imvj``: IQN-ILS around a
+multi-vector inverse Jacobian kept from window to window. Pure numpy/scipy.
 """
 
 from __future__ import annotations
@@ -22,19 +23,22 @@ from .base import (
 )
 from .constant import ConstantRelaxation, ConstantSettings
 from .iqn_ils import InverseJacobian, IQNILSAcceleration, IQNILSSettings
+from .iqn_imvj import IQNIMVJAcceleration
 from .quasi_newton import BaseQNAcceleration, QRFilter, qr1_filter, qr2_filter
 
 SCHEMES: dict[str, tuple[type, Callable[..., Acceleration]]] = {
     "constant": (ConstantSettings, ConstantRelaxation),
     "aitken": (AitkenSettings, AitkenRelaxation),
     "iqn-ils": (IQNILSSettings, IQNILSAcceleration),
+    "iqn-imvj": (IQNILSSettings, IQNIMVJAcceleration),
 }
 
 
 def make_acceleration(
     name: str, *, h0: InverseJacobian | None = None, **settings: Any
 ) -> Acceleration:
-    """Build the scheme ``name`` ("constant", "aitken", "iqn-ils") from its settings.
+    """Build the scheme ``name`` ("constant", "aitken", "iqn-ils", "iqn-imvj") from its
+    settings.
 
     ``h0`` (IQN-ILS only): initial inverse-Jacobian approximation, see :mod:`.iqn_ils`.
     """
@@ -80,6 +84,7 @@ __all__ = [
     "FieldLayout",
     "IQNILSAcceleration",
     "IQNILSSettings",
+    "IQNIMVJAcceleration",
     "InverseJacobian",
     "Preconditioner",
     "QRFilter",

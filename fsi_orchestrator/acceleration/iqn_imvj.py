@@ -36,7 +36,8 @@ class IQNIMVJAcceleration(IQNILSAcceleration):
 
     def _on_initialize(self) -> None:
         super()._on_initialize()
-        self._jacobian = np.eye(self.layout.size)  # plain IQN-ILS in the first window
+        # the first window's steps: relaxation omega_0 r where no secant has been seen
+        self._jacobian = self.settings.initial_relaxation * np.eye(self.layout.size)
 
     def _converged(self, x: NDArray | None, x_tilde: NDArray | None) -> None:
         if x is not None and x_tilde is not None:

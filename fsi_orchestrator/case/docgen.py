@@ -22,7 +22,9 @@ an unknown key, a wrong type or a value out of range stops the run with one line
 Any key can be overridden on the command line: `--set section.key=value` (TOML syntax; bare
 words are strings, e.g. `--set fluid.model=potential`).
 
-Units are SI and stated in each key's name.
+Units are SI and stated in each key's name. A default of "unset": the key has no value
+unless given, and its meaning says what then holds (a preset's value, one derived from other
+keys, or off).
 """
 
 
@@ -40,8 +42,8 @@ def _type_name(tp) -> str:
 
 def _default(f: dataclasses.Field) -> str:
     value = f.default
-    if value is None:
-        return "preset / derived"
+    if value is None:  # what unset means: the description says (a preset's, derived, off)
+        return "unset"
     if isinstance(value, Enum):
         return f'`"{value.value}"`'
     if isinstance(value, tuple):
@@ -84,7 +86,13 @@ def render() -> str:
 
 
 def main() -> int:
-    target = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("docs/case_format.md")
+    """``python -m fsi_orchestrator.case.docgen [FILE]``: (re)write the case format reference
+    (default: the repository's docs/case_format.md)."""
+    if len(sys.argv) > 1 and sys.argv[1].startswith("-"):
+        print(main.__doc__.split(":", 1)[0].strip("`"), file=sys.stderr)
+        return 0 if sys.argv[1] in ("-h", "--help") else 2
+    default = Path(__file__).resolve().parents[2] / "docs" / "case_format.md"
+    target = Path(sys.argv[1]) if len(sys.argv) > 1 else default
     target.write_text(render())
     print(f"wrote {target}")
     return 0

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -156,8 +155,3 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 f"time.periods ({t.periods:g}); for a run without iterations use "
                 'coupling.scheme = "explicit-am"'
             )
-
-
-def replace(case: Case, **sections: Any) -> Case:
-    """A copy of ``case`` with whole sections replaced (sections are frozen)."""
-    return dataclasses.replace(case, **sections)

@@ -61,7 +61,10 @@ def _describe(tp: Any) -> str:
     if origin in (typing.Union, types.UnionType):
         return " or ".join(_describe(a) for a in typing.get_args(tp) if a is not type(None))
     if origin is tuple:
-        return "list of " + _describe(typing.get_args(tp)[0])
+        inner = typing.get_args(tp)[0]
+        return "list of " + {float: "numbers", int: "integers", str: "strings"}.get(
+            inner, _describe(inner)
+        )
     return {float: "number", int: "integer", str: "string", bool: "true/false"}.get(tp, str(tp))
 
 

@@ -472,8 +472,9 @@ class Coupling:
     scheme: CouplingScheme = param(CouplingScheme.IQN_ILS_AM, "Partitioned coupling scheme.")
     relaxation: float | None = param(
         None,
-        "constant: the relaxation factor; aitken/iqn-ils: the first iteration's (default 0.5; "
-        "*-am schemes: 1.0, their preconditioned map is contractive).",
+        "constant: the relaxation factor; aitken/iqn-ils: the first iteration's (default 0.5); "
+        "iqn-ils-am: its starting inverse Jacobian is this times the identity (default 1.0, "
+        "the preconditioned map is contractive); explicit-am: unused.",
         gt=0,
         le=1,
     )
@@ -539,7 +540,11 @@ class Coupling:
 
 @dataclass(frozen=True, kw_only=True)
 class Output:
-    vtk: bool = param(True, "Write VTU/PVD series of the shell.")
+    vtk: bool = param(
+        True,
+        "Write VTU/PVD series of the shell (vtk/shell.pvd) and, in partitioned runs, of the "
+        "fluid's loads on the interface (vtk/fluid.pvd).",
+    )
     vtk_every: int = param(1, "Write VTU every n windows.", ge=1)
     checkpoint_every: int = param(10, "Write a restart checkpoint every n windows.", ge=1)
     flow_every: int = param(

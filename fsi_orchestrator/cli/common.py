@@ -16,7 +16,11 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def base_parser(prog: str, description: str) -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=prog, description=description)
+    parser = argparse.ArgumentParser(
+        prog=prog,
+        description=description,
+        epilog="Every case key, its unit and default: docs/case_format.md.",
+    )
     parser.add_argument("case", help="case folder (holding case.toml)")
     parser.add_argument(
         "--set",

@@ -1,5 +1,6 @@
-"""Composition root: builds the solvers a case asks for. The only orchestrator module that
-imports the adapters (lazily, so that `--help` and case errors stay fast)."""
+"""Composition root: builds the solvers a case asks for. With the commands beside it in
+fsi_orchestrator/cli/, the only part of the orchestrator that imports the adapters (lazily, so
+that `--help` and case errors stay fast)."""
 
 from __future__ import annotations
 
@@ -12,9 +13,9 @@ from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
 
 
-def modal_fluid_case(case: Case) -> Case:
-    """A modal study needs no CFD: an OpenFOAM case is analysed with the potential model in
-    its tank."""
+def without_cfd(case: Case) -> Case:
+    """A study that needs no CFD (modes, the linear frequency sweep): an OpenFOAM case is
+    analysed with the potential model in its tank."""
     if case.fluid.model is not FluidModel.OPENFOAM:
         return case
     fluid = dataclasses.replace(case.fluid, model=FluidModel.POTENTIAL, domain=FluidDomain.TANK)

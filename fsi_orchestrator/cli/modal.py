@@ -8,14 +8,14 @@ import time
 from collections.abc import Sequence
 
 from .common import EXIT_OK, base_parser, emit, load, run_main
-from .compose import modal_fluid_case, shell_with_fast_fluid
+from .compose import shell_with_fast_fluid, without_cfd
 
 
 def modal_summary(case) -> dict:
     from solid_adapter.solvers import modal_analysis, mode_kind
 
     start = time.perf_counter()
-    case = modal_fluid_case(case)
+    case = without_cfd(case)
     model, added = shell_with_fast_fluid(case)
     n = case.analysis.num_modes
 

@@ -34,7 +34,8 @@ def _thrust(row: dict) -> float:
 
 
 def plot_sweep(csv_path: Path, output: Path) -> Path:
-    rows = list(csv.DictReader(open(csv_path)))
+    with open(csv_path, newline="") as f:
+        rows = list(csv.DictReader(f))
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
     for waveform in sorted({r["waveform"] for r in rows}):
         sel = [r for r in rows if r["waveform"] == waveform]
@@ -129,7 +130,11 @@ def plot_flow(pvd: Path, output: Path) -> Path | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="fsi-post", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="fsi-post",
+        description="Figures from results: amplitude and thrust versus frequency from a sweep, "
+        "histories (and flow slices) from a run.",
+    )
     parser.add_argument("path", help="sweep.csv, results.h5 or a folder holding one")
     parser.add_argument("--output", help="folder for the figures (default: next to the input)")
     args = parser.parse_args(argv)
@@ -145,12 +150,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     output = Path(args.output) if args.output else found.parent
     output.mkdir(parents=True, exist_ok=True)
-    if found.suffix == ".csv":
-        print(plot_sweep(found, output))
-        return EXIT_OK
-    print(plot_run(found, output))
-    slices = found.parent / "vtk" / "flow_midheight.pvd"
-    flow = plot_flow(slices, output) if slices.is_file() else None
+    try:
+        if found.suffix == ".csv":
+            print(plot_sweep(found, output))
+            return EXIT_OK
+        print(plot_run(found, output))
+        slices = found.parent / "vtk" / "flow_midheight.pvd"
+        flow = plot_flow(slices, output) if slices.is_file() else None
+    except (KeyError, ValueError, OSError) as err:  # not what fsi-run / fsi-sweep write
+        print(
+            f"error: {found}: not a table fsi-run or fsi-sweep wrote ({err!r}); "
+            "point fsi-post at a run's output folder or a sweep's sweep.csv",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     if flow is not None:
         print(flow)
     return EXIT_OK

@@ -14,11 +14,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..case import Case
+from ..case import Case, CaseError
 from ..case.schema import AnalysisKind, FluidModel
 from ..case.timing import case_schedule, windows_per_period
-from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
-from ..results import ResultsFile
+from ..loop import OutputSettings, ResumeError, Schedule, StopRule, WindowLoop
+from ..results import CHECKPOINT_FILE, ResultsFile
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,
@@ -147,6 +147,7 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
 
 
 def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
+    set_up = time.perf_counter()
     start_note = None
     if is_coupled(case):
         factory = None
@@ -193,6 +194,16 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
         summary["thrust_source"] = "slender_body"
     summary["wall_s"] = time.perf_counter() - start
+    summary["setup_s"] = start - set_up
+    if added is not None:  # the fast fluid's added mass is in the structure's equations
+        summary.update(coupling_scheme="monolithic", mean_fluid_solves_per_window=1.0)
+    if coupling is not None and coupling.resumed_from_scheme is not None:
+        fresh = " (its accelerator started afresh)" if coupling.accelerator is not None else ""
+        print(
+            f'note: resumed a run saved with coupling.scheme = "{coupling.resumed_from_scheme}"'
+            f' and went on with "{coupling.settings.scheme}"{fresh}',
+            file=sys.stderr,
+        )
     if loop.stopped is not None:
         summary["stopped_periodic"] = loop.stopped
         print(f"note: {loop.stopped}", file=sys.stderr)
@@ -227,8 +238,11 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         wall = h5["wall_s"][:, 0]
         # (absent in a run resumed from an older version's results)
         fluid = h5["coupling/fluid_wall_s"][:, 0] if "coupling/fluid_wall_s" in h5 else None
+        # whether a window was iterated (a resumed run may have changed its scheme)
+        iterated = h5["coupling/iterated"][:, 0] > 0 if "coupling/iterated" in h5 else None
     last = slice(-min(len(solves), windows_per_period(case)), None)
-    iterated = np.array([coupling.settings.iterates(w) for w in range(len(solves))], dtype=bool)
+    if iterated is None:
+        iterated = np.array([coupling.settings.iterates(w) for w in range(len(solves))])
     explicit = {}
     if coupling.settings.implicit and not iterated.all():  # an explicit start-up
         explicit = {
@@ -258,8 +272,10 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
             coupled_wall[last].mean() / prescribed
         )
     start = {}
+    if coupling.resumed_from_scheme is not None:
+        start["resumed_from_scheme"] = coupling.resumed_from_scheme
     if coupling.start_fit is not None:
-        start = {"start_correction": coupling.start_fit.summary(coupling.start_orbit.shape_z)}
+        start["start_correction"] = coupling.start_fit.summary(coupling.start_orbit.shape_z)
     return {
         **start,
         "coupling_scheme": coupling.settings.scheme,
@@ -340,6 +356,14 @@ def _body(args: argparse.Namespace) -> int:
     elif kind is AnalysisKind.STATIC:
         summary = static_summary(case)
     else:
+        try:  # before the set-up's seconds: a folder that cannot be written fails at once
+            output.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+        if args.resume and not (output / CHECKPOINT_FILE).exists():
+            raise ResumeError(
+                f"{output / CHECKPOINT_FILE}: no checkpoint to resume from (run without --resume)"
+            )
         summary = run_dynamic(case, output, args.resume, show_progress=not args.quiet)
     emit(summary, args.json)
     return EXIT_OK

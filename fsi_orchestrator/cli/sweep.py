@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, CaseError
-from ..case.schema import Waveform
+from ..case.schema import FluidModel, Waveform
 from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
-from .compose import shell_with_fast_fluid
+from .compose import shell_with_fast_fluid, without_cfd
 
 SAMPLES_PER_PERIOD = 64
 MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
@@ -33,13 +33,20 @@ MODES = 40  # wet modes in the superposition (with static correction), up to ~30
 
 def parse_frequencies(text: str) -> list[float]:
     """ "1:25:2" -> 1, 3, ..., 25; "3,5,10" -> those."""
+    usage = f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz, all > 0)"
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
-            return list(np.arange(start, stop + 0.5 * step, step))
-        return [float(v) for v in text.split(",")]
+            if not step > 0:
+                raise ValueError
+            frequencies = list(np.arange(start, stop + 0.5 * step, step))
+        else:
+            frequencies = [float(v) for v in text.split(",")]
     except ValueError:
-        raise CaseError(f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz)") from None
+        raise CaseError(usage) from None
+    if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
+        raise CaseError(usage)
+    return frequencies
 
 
 def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
@@ -161,7 +168,7 @@ def chained(case: Case, previous: Path) -> Case:
     point learned (same shell, another drive: coarse fish, 3 -> 5 Hz, 3.53 -> 3.20 fluid
     solves per window in period 1), unless the case names its own coupling.jacobian_from.
     The results agree to the coupling tolerance with a cold start."""
-    from ..case.schema import CouplingScheme, FluidModel
+    from ..case.schema import CouplingScheme
     from ..results import CHECKPOINT_FILE
 
     c = case.coupling
@@ -220,13 +227,24 @@ def print_table(rows: list[dict]) -> None:
 def _body(args: argparse.Namespace) -> int:
     case = load(args)
     frequencies = parse_frequencies(args.frequencies)
+    names = "sine,square" if args.waveforms.strip() == "both" else args.waveforms
     try:
-        waveforms = [Waveform(w.strip()) for w in args.waveforms.split(",")]
+        waveforms = [Waveform(w.strip()) for w in names.split(",")]
     except ValueError:
-        raise CaseError(f"--waveforms {args.waveforms!r}: use sine, square or both") from None
+        raise CaseError(
+            f"--waveforms {args.waveforms!r}: use sine, square, sine,square or both"
+        ) from None
     output = Path(args.output) if args.output else case.directory / "output" / "sweep"
     start = time.perf_counter()
     if args.method == "linear":
+        case = without_cfd(case)
+        if case.fluid.model is not FluidModel.NONE and case.fluid.damping_ratio == 0:
+            print(
+                "note: fluid.damping_ratio = 0: the linear sweep has no damping, so near the "
+                "wet resonances its amplitudes grow without bound; e.g. --set "
+                "fluid.damping_ratio=0.05",
+                file=sys.stderr,
+            )
         rows = linear_sweep(case, frequencies, waveforms)
     else:
         rows = transient_sweep(case, frequencies, waveforms, output)
@@ -238,7 +256,7 @@ def _body(args: argparse.Namespace) -> int:
     else:
         print_table(rows)
         print(f"wrote {output / 'sweep.csv'} ({time.perf_counter() - start:.1f} s)")
-    failed = any(r.get("status", "ok") != "ok" for r in rows)
+    failed = any(r.get("status", "ok").startswith("failed") for r in rows)
     return EXIT_FAILED if failed else EXIT_OK
 
 
@@ -246,7 +264,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-sweep", "Tail amplitude and thrust versus driving frequency.")
     parser.add_argument("--frequencies", default="1:25:2", help="start:stop:step or a,b,c Hz")
     parser.add_argument("--waveforms", default="sine,square", help="sine, square or both")
-    parser.add_argument("--method", choices=("linear", "transient"), default="linear")
+    parser.add_argument(
+        "--method",
+        choices=("linear", "transient"),
+        default="linear",
+        help="linear: modal superposition about the mean-voltage equilibrium, no CFD (an "
+        "OpenFOAM case uses the potential model in its tank; seconds); transient: a run per "
+        "frequency with the case's own fluid (MPI: one frequency per rank)",
+    )
     parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
     return run_main(_body, parser, argv)
 
