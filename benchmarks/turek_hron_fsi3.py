@@ -33,15 +33,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fluid_adapter.openfoam.turek_fsi import (  # noqa: E402
-    FSI3,
-    FsiHistory,
-    build_fluid,
-    flag_participant,
-    generate_fsi_case,
-    run_coupled,
-)
+from fluid_adapter.openfoam.turek_fsi import FSI3, build_fluid, generate_fsi_case  # noqa: E402
 from fsi_orchestrator.case.schema import TimeScheme  # noqa: E402
+from fsi_orchestrator.cli.turek_hron import FsiHistory, flag_participant, run_coupled  # noqa: E402
 from fsi_orchestrator.coupling import CouplingSettings  # noqa: E402
 
 

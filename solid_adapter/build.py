@@ -48,6 +48,21 @@ def static_loads(case: Case, model: ShellModel) -> StaticLoads:
     return StaticLoads(edge=edge, pressure_pa=case.loads.pressure_pa)
 
 
+def static_load_function(model: ShellModel, loads: StaticLoads):
+    """(lam, x, tangent) -> (force, its tangent or None): the static loads at load factor lam
+    (the pressure follows the deformed plate)."""
+
+    def load(lam: float, x: NDArray, tangent: bool):
+        f = lam * loads.edge
+        if loads.pressure_pa == 0:
+            return f, None
+        p = np.full(model.n_nodes, lam * loads.pressure_pa)
+        fp, Kp = model.pressure_load(x, p, tangent)
+        return f + fp, Kp
+
+    return load
+
+
 def rayleigh_coefficients(case: Case, model: ShellModel) -> tuple[float, float]:
     """(alpha, beta) of C = alpha M + beta K0: analysis.rayleigh_*, plus, with
     fluid.damping_ratio > 0, the pair giving that ratio at the first two bending modes of the
@@ -123,11 +138,7 @@ def mean_voltage_equilibrium(
     """The static state under the drive's mean voltages (and the static loads)."""
     mean = mean_volts(drive)
     return solve_static(
-        model,
-        lambda lam, x, tangent: (lam * loads.edge, None),
-        lambda lam: lam * mean,
-        4,
-        newton_settings(case),
+        model, static_load_function(model, loads), lambda lam: lam * mean, 4, newton_settings(case)
     )
 
 
@@ -232,20 +243,12 @@ def run_static(case: Case, model: ShellModel | None = None) -> StaticResult:
     tip = model.mesh.nearest_node(*model.layout.tip_point)
     history = []
 
-    def load_fn(lam: float, x: NDArray, tangent: bool):
-        f = lam * loads.edge
-        if loads.pressure_pa == 0:
-            return f, None
-        p = np.full(model.n_nodes, lam * loads.pressure_pa)
-        fp, Kp = model.pressure_load(x, p, tangent)
-        return f + fp, Kp
-
     def record(k: int, lam: float, x: NDArray) -> None:
         history.append([lam, *x.reshape(-1, NDOF)[tip, :3]])
 
     x = solve_static(
         model,
-        load_fn,
+        static_load_function(model, loads),
         lambda lam: lam * static_volts,
         case.analysis.load_steps,
         newton_settings(case),

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam.turek_fsi import FsiHistory, PerUnitDepth
+from fluid_adapter.openfoam.turek_fsi import PerUnitDepth
+from fsi_orchestrator.cli.turek_hron import FsiHistory
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, Participant, State
 
 

@@ -50,7 +50,7 @@ class Cfd1Result:
     forces_fo_n_m: np.ndarray  # the forces function object's total, for comparison
 
 
-def _settings(bodies: tuple[str, ...] = (BODY,), moving: bool = False) -> FlowSettings:
+def channel_settings(bodies: tuple[str, ...] = (BODY,), moving: bool = False) -> FlowSettings:
     return FlowSettings(
         nu_m2_s=NU,
         rho_kg_m3=RHO,
@@ -232,7 +232,7 @@ def generate_steady(
     """Mesh the channel and write a simpleFoam case (rigid body) in ``case`` (replaced)."""
     if case.exists():
         shutil.rmtree(case)
-    s = _settings(bodies)
+    s = channel_settings(bodies)
     control = control_dict(s, start=0.0, end=float(iterations), dt=1.0)
     control.update(
         application="simpleFoam",

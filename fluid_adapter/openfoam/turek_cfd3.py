@@ -46,9 +46,9 @@ from .turek import (
     RHO,
     SIDES,
     WALLS,
-    _settings,
     cell_count,
     channel_fields,
+    channel_settings,
     generate_steady,
 )
 
@@ -75,7 +75,7 @@ class Cfd3Result:
 
 def flow_settings(turbulence: Turbulence, max_courant: float) -> FlowSettings:
     return replace(
-        _settings((BODY,)),
+        channel_settings((BODY,)),
         turbulence=turbulence,
         time_scheme=TimeScheme.BACKWARD,
         moving=False,

@@ -1,4 +1,4 @@
-"""Turek & Hron (2006) FSI benchmarks: the elastic flag behind the cylinder, coupled.
+"""Turek & Hron (2006) FSI benchmarks: the channel flow around the cylinder and the flag.
 
 Same channel, cylinder and flag as CFD1 (turek.py), fluid rho = 1000 kg/m3, nu = 1e-3 m2/s,
 parabolic inflow; the flag is a St. Venant-Kirchhoff solid in plane strain
@@ -17,16 +17,15 @@ Units: the mesh is one cell (DEPTH = 0.01 m) thick, so the fluid's forces are fo
 the plane-strain flag works per unit depth (N/m). ``PerUnitDepth`` divides the fluid's forces by
 DEPTH on their way to the coupling; drag and lift are reported per unit depth as well.
 
-Steady FSI1: the flag is quasi-static (StaticFlagIntegrator) and the windows are pseudo-time:
-each window is coupled implicitly (IQN-ILS) and windows run until point A stops moving.
+This module is the fluid's side; the coupled runs (flag + channel + coupling) are composed in
+fsi_orchestrator/cli/turek_hron.py.
 """
 
 from __future__ import annotations
 
 import shutil
-import time as wallclock
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,9 +33,7 @@ from foamlib import FoamFieldFile
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case.schema import TimeScheme
-from fsi_orchestrator.coupling import Coupling, CouplingSettings
 from fsi_orchestrator.participant import FORCE, InterfaceMesh, Participant, State
-from solid_adapter.plane_strain import FlagParticipant, build_flag_participant
 
 from . import runner
 from .casefiles import BODY_MOTION_BC, MOTION_FIELD, FlowSettings
@@ -55,9 +52,8 @@ from .turek import (
     OUTLET,
     SIDES,
     WALLS,
-    _settings,
-    cell_count,
     channel_fields,
+    channel_settings,
     generate_steady,
 )
 
@@ -152,7 +148,7 @@ def generate_fsi_case(
 
 def flow_settings(time_scheme: TimeScheme, max_courant: float, n_outer: int) -> FlowSettings:
     return replace(
-        _settings(BODIES, moving=True),
+        channel_settings(BODIES, moving=True),
         time_scheme=time_scheme,
         max_courant=max_courant,
         n_outer=n_outer,
@@ -229,32 +225,6 @@ class PerUnitDepth:
         self.fluid.finalize()
 
 
-# --------------------------------------------------------------------------- coupled run
-
-
-@dataclass
-class FsiHistory:
-    """Per window: time (s), point A's displacement (m), drag and lift on cylinder + flag (N/m),
-    fluid solves."""
-
-    cells: int = 0
-    time_s: list[float] = field(default_factory=list)
-    tip_m: list[NDArray] = field(default_factory=list)
-    drag_n_m: list[float] = field(default_factory=list)
-    lift_n_m: list[float] = field(default_factory=list)
-    fluid_solves: list[int] = field(default_factory=list)
-    wall_s: float = 0.0
-
-    def arrays(self) -> dict[str, NDArray]:
-        return {
-            "t": np.array(self.time_s),
-            "ux": np.array([u[0] for u in self.tip_m]),
-            "uy": np.array([u[1] for u in self.tip_m]),
-            "drag": np.array(self.drag_n_m),
-            "lift": np.array(self.lift_n_m),
-        }
-
-
 def body_force_n_m(fluid: OpenFoamParticipant) -> NDArray:
     """Force on cylinder + flag per unit depth at the last window end: the flag's from the
     participant's window loads, the cylinder's from the same sampling (rigid, end value)."""
@@ -264,98 +234,3 @@ def body_force_n_m(fluid: OpenFoamParticipant) -> NDArray:
     name = run.time_folder(fluid.time, fluid.dt)
     cyl = read_loads(run.path, name, cylinder, np.zeros_like(cylinder.points0), run.rho)
     return (flag + cyl.force) / DEPTH
-
-
-StopFn = Callable[[FsiHistory], bool]
-
-
-def run_coupled(
-    fluid: OpenFoamParticipant,
-    solid: FlagParticipant,
-    coupling: CouplingSettings,
-    *,
-    dt: float,
-    max_windows: int,
-    stop: StopFn | None = None,
-    progress: Callable[[FsiHistory], None] | None = None,
-) -> FsiHistory:
-    """Couple window by window until ``stop(history)`` or ``max_windows``."""
-    per_depth = PerUnitDepth(fluid, DEPTH)
-    loop = Coupling(per_depth, solid.interface().points, coupling)
-    history = FsiHistory(cells=cell_count(fluid.run.path))
-    start = wallclock.perf_counter()
-    for window in range(max_windows):
-        info = loop.solve_window(solid, dt, window)
-        force = body_force_n_m(fluid)
-        history.time_s.append(solid.time)
-        history.tip_m.append(np.asarray(solid.monitor()["tip_displacement_m"])[:2].copy())
-        history.drag_n_m.append(float(force[0]))
-        history.lift_n_m.append(float(force[1]))
-        history.fluid_solves.append(int(info["coupling/fluid_solves"]))
-        history.wall_s = wallclock.perf_counter() - start
-        if progress is not None:
-            progress(history)
-        if stop is not None and stop(history):
-            break
-    fluid.finalize()
-    return history
-
-
-def steady_reached(tolerance_rel: float, span: int = 3) -> StopFn:
-    """Point A stayed within ``tolerance_rel`` of its last displacement over the last ``span``
-    windows (one window's change alone is fooled by the turning points of the slow, damped
-    approach to the steady state)."""
-
-    def stop(h: FsiHistory) -> bool:
-        if len(h.tip_m) <= span:
-            return False
-        last = h.tip_m[-1]
-        change = max(np.linalg.norm(last - u) for u in h.tip_m[-1 - span : -1])
-        return bool(change < tolerance_rel * np.linalg.norm(last))
-
-    return stop
-
-
-def flag_participant(
-    bench: TurekHronFsi, *, static: bool, elements: tuple[int, int]
-) -> FlagParticipant:
-    """The benchmark's flag (arc clamp on the cylinder), undeformed; ``static``: quasi-static."""
-    return build_flag_participant(
-        density_kg_m3=bench.solid_density_kg_m3,
-        shear_modulus_pa=bench.shear_modulus_pa,
-        poisson_ratio=bench.poisson_ratio,
-        elements=elements,
-        static=static,
-    )
-
-
-def run_fsi1(
-    workdir: Path,
-    *,
-    body_size: float = 2.5e-3,
-    far_size: float = 0.02,
-    dt: float = 0.5,
-    max_windows: int = 24,
-    tolerance_rel: float = 2e-3,
-    elements: tuple[int, int] = (40, 4),
-    progress: Callable[[FsiHistory], None] | None = None,
-) -> FsiHistory:
-    """FSI1 to its steady state: rigid-flag simpleFoam start, then windows of ``dt`` seconds of
-    pseudo-time (quasi-static flag, IQN-ILS per window) until point A moves less than
-    ``tolerance_rel`` of its displacement over three windows. PISO (one outer corrector) at
-    Courant 2: the window values equal two outer correctors' to 1e-4, at 0.8 x the cost."""
-    settings = generate_fsi_case(workdir, FSI1, body_size=body_size, far_size=far_size, n_outer=1)
-    fluid = build_fluid(workdir / "fsi", settings, dt, max_windows)
-    solid = flag_participant(FSI1, static=True, elements=elements)
-    coupling = CouplingSettings(
-        scheme="iqn-ils", relaxation=0.5, tolerance_rel=1e-4, max_iterations=20
-    )
-    return run_coupled(
-        fluid,
-        solid,
-        coupling,
-        dt=dt,
-        max_windows=max_windows,
-        stop=steady_reached(tolerance_rel),
-        progress=progress,
-    )

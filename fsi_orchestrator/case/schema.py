@@ -546,7 +546,13 @@ class Output:
         "fluid's loads on the interface (vtk/fluid.pvd).",
     )
     vtk_every: int = param(1, "Write VTU every n windows.", ge=1)
-    checkpoint_every: int = param(10, "Write a restart checkpoint every n windows.", ge=1)
+    checkpoint_every: int = param(
+        10,
+        "Write a restart checkpoint every n windows. The structure factors a fresh tangent after "
+        "each (analysis.reuse_tangent), so that --resume repeats the run exactly; runs with "
+        "different n agree to the Newton tolerance.",
+        ge=1,
+    )
     flow_every: int = param(
         10,
         "OpenFOAM: write flow slices (p, U, vorticity; vtk/flow_midheight.pvd, a horizontal "
