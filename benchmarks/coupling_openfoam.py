@@ -35,7 +35,7 @@ from fsi_orchestrator.case.loader import load_case  # noqa: E402
 from fsi_orchestrator.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
 from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
 from fsi_orchestrator.loop import load_checkpoint  # noqa: E402
-from fsi_orchestrator.results import CHECKPOINT_FILE  # noqa: E402
+from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 # scheme -> extra case overrides; "reference" is the tightly converged run
@@ -69,21 +69,35 @@ RUNS = {
 }
 
 
+def set_up(name: str, overrides: list[str], folder: Path, start: Path | None, windows: int):
+    """(case, structure, coupling, first window) after the lead-in or from ``start``, for
+    ``windows`` more windows."""
+    overrides = overrides + RUNS[name]
+    if start is not None:  # the fluid plans its windows: the checkpoint's and these
+        done = int(read_checkpoint(start)[0]["window"])
+        steps = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides).time.steps_per_period
+        overrides = [*overrides, f"time.periods={(done + windows) / steps + 1:g}"]
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides)
+    solid, coupling = coupled_setup(case, openfoam_fluid_factory(folder, fresh=False))
+    if start is None:  # prescribed motion: the fluid's cost per window alone
+        coupling.lead_in(solid, window_s(case))
+        return case, solid, coupling, 1  # window 0 would hold the lead-in, done here apart
+    return case, solid, coupling, load_checkpoint(start, solid, coupling)
+
+
+def window_s(case) -> float:
+    return 1.0 / (case.actuation.frequency_hz * case.time.steps_per_period)
+
+
 def one_run(
     name: str, overrides: list[str], windows: int, folder: Path, start: Path | None = None
 ) -> dict:
     """``windows`` coupled windows after the lead-in, or after the checkpoint ``start``."""
-    case = load_case(ROOT / "cases" / "fixed_head_3Hz", overrides + RUNS[name])
-    solid, coupling = coupled_setup(case, openfoam_fluid_factory(folder, fresh=False))
-    fluid, dt = coupling.fluid, 1.0 / (case.actuation.frequency_hz * case.time.steps_per_period)
-    first = 1  # window 0 would hold the lead-in, done here apart
-    if start is None:
-        coupling.lead_in(solid, dt)  # prescribed motion: the fluid's cost per window alone
-    else:
-        first = load_checkpoint(start, solid, coupling)
+    case, solid, coupling, first = set_up(name, overrides, folder, start, windows)
+    fluid, dt = coupling.fluid, window_s(case)
     prescribed_s = coupling.prescribed_wall_s_per_window
     fluid_time = 0.0
-    solves, tips, forces = [], [], []
+    solves, tips, forces, thrusts, motions = [], [], [], [], []
     t0 = time.perf_counter()
     status = "ok"
     try:
@@ -93,8 +107,12 @@ def one_run(
             fluid_time += stats["coupling/fluid_wall_s"]
             tips.append(solid.monitor()["tip_displacement_m"][2])
             forces.append(fluid.monitor()["force_n"][2])
+            thrusts.append(fluid.monitor()["thrust_n"])
+            # the converged interface motion, for a prescribed-motion replay of these windows
+            motion = solid.write_data()
+            motions.append({k: coupling.mapping.consistent(v) for k, v in motion.items()})
     except CouplingDivergenceError as err:
-        status = f"diverged at window {err.window}"
+        status = f"diverged at window {err.window}: {err}"
     finally:
         fluid.finalize()
     wall = time.perf_counter() - t0
@@ -108,8 +126,25 @@ def one_run(
         "ratio_to_prescribed": wall / n / prescribed_s,
         "non_fluid_share": 1 - fluid_time / wall if wall else float("nan"),
         "tip_m": tips,
+        "thrust_n": thrusts,
+        "motions": motions,
         "force_z_n": forces,
     }
+
+
+def prescribed_run(overrides: list[str], folder: Path, start: Path, motions: list[dict]) -> float:
+    """Seconds per window of the fluid alone moved through ``motions`` from ``start``: the
+    prescribed-motion CFD run of the same windows (one fluid step each)."""
+    case, _, coupling, _ = set_up("explicit-am", overrides, folder, start, len(motions))
+    fluid, dt = coupling.fluid, window_s(case)
+    t0 = time.perf_counter()
+    try:
+        for motion in motions:
+            fluid.read_data(motion)
+            fluid.solve(dt)
+    finally:
+        fluid.finalize()
+    return (time.perf_counter() - t0) / len(motions)
 
 
 def main() -> None:
@@ -145,6 +180,17 @@ def main() -> None:
             flush=True,
         )
     ref = next((r for r in rows if r["scheme"] == "reference"), None)
+    if start is not None and ref is not None and ref["motions"]:
+        # the checkpoint's lead-in cost was measured in another run; replay the reference's
+        # windows as prescribed motion here, in this run
+        folder = base / "prescribed"
+        shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
+        prescribed = prescribed_run(overrides, folder, start, ref["motions"])
+        print(f"prescribed motion (the reference's windows replayed): {prescribed:.2f} s/window")
+        for r in rows:
+            r["prescribed_s_per_window"] = prescribed
+            r["ratio_to_prescribed"] = r["wall_s_per_window"] / prescribed
+            print(f"{r['scheme']:20s} x{r['ratio_to_prescribed']:5.2f} of prescribed (replayed)")
     if ref is not None and ref["tip_m"]:
         for r in rows:
             k = min(len(r["tip_m"]), len(ref["tip_m"]))
@@ -153,12 +199,16 @@ def main() -> None:
                 force = np.abs(np.subtract(r["force_z_n"][:k], ref["force_z_n"][:k])).max()
                 r["tip_error_m"] = float(tip)
                 r["force_error_rel"] = float(force / np.abs(ref["force_z_n"][:k]).max())
+                ref_thrust = np.mean(ref["thrust_n"][:k])
+                r["thrust_error_rel"] = float(abs(np.mean(r["thrust_n"][:k]) - ref_thrust))
+                r["thrust_error_rel"] /= abs(ref_thrust)
                 print(
                     f"{r['scheme']:20s} tip diff {tip * 1e3:.4f} mm  "
-                    f"Fz diff {100 * r['force_error_rel']:.3f} % of max"
+                    f"Fz diff {100 * r['force_error_rel']:.3f} % of max  "
+                    f"mean thrust diff {100 * r['thrust_error_rel']:.3f} %"
                 )
     if args.json:
-        print(json.dumps(rows))
+        print(json.dumps([{k: v for k, v in r.items() if k != "motions"} for r in rows]))
     shutil.rmtree(base, ignore_errors=True)
 
 

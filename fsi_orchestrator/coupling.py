@@ -50,6 +50,7 @@ from .participant import (
     PAST_DISPLACEMENT,
     VELOCITY,
     Participant,
+    ParticipantSetupError,
 )
 from .predictors import EXPLICIT_RULES, PERIODIC_RULES, Predictor
 from .start_orbit import (
@@ -369,7 +370,7 @@ class Coupling:
             try:
                 return x, self._gauss_seidel(solid, x, dt)
             except (RuntimeError, FloatingPointError) as err:
-                if isinstance(err, CouplingDivergenceError):
+                if isinstance(err, CouplingDivergenceError | ParticipantSetupError):
                     raise
                 if x_good is None or attempt == MAX_RETRIES:
                     raise CouplingDivergenceError(

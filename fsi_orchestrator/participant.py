@@ -38,6 +38,12 @@ PAST_DISPLACEMENT = "past_displacement"
 State = Mapping[str, NDArray | float | int]
 
 
+class ParticipantSetupError(RuntimeError):
+    """A solver cannot do what it was asked whatever the iterate (a missing program, a request
+    its set-up does not allow): the coupling passes it on as it is, without retrying the window
+    or calling it a divergence."""
+
+
 @dataclass(frozen=True)
 class InterfaceMesh:
     """Reference geometry of a participant's coupling interface."""

@@ -13,7 +13,14 @@ import pytest
 
 from fsi_orchestrator.convergence import CouplingDivergenceError
 from fsi_orchestrator.coupling import Coupling, CouplingSettings
-from fsi_orchestrator.participant import ACCELERATION, DISPLACEMENT, FORCE, VELOCITY, InterfaceMesh
+from fsi_orchestrator.participant import (
+    ACCELERATION,
+    DISPLACEMENT,
+    FORCE,
+    VELOCITY,
+    InterfaceMesh,
+    ParticipantSetupError,
+)
 
 POINTS = np.array([[x, y, 0.0] for x in np.linspace(0, 1, 8) for y in (-0.1, 0.1)])
 CELLS = np.array([[2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1] for i in range(7)])
@@ -52,9 +59,9 @@ class Spring:
 class FlakyFluid(Spring):
     name = "fluid"
 
-    def __init__(self, c: float, fail_on: set[int]) -> None:
+    def __init__(self, c: float, fail_on: set[int], error=RuntimeError) -> None:
         super().__init__(1.0, 0.0)
-        self.c, self.fail_on, self.calls = c, fail_on, 0
+        self.c, self.fail_on, self.calls, self.error = c, fail_on, 0, error
 
     def read_data(self, data):
         self.u = np.array(data[DISPLACEMENT])
@@ -62,7 +69,7 @@ class FlakyFluid(Spring):
     def solve(self, dt):
         self.calls += 1
         if self.calls in self.fail_on:
-            raise RuntimeError("pimpleFoam diverged (Courant 8.5)")
+            raise self.error("pimpleFoam diverged (Courant 8.5)")
         self.time += dt
 
     def write_data(self):
@@ -75,9 +82,9 @@ class FlakyFluid(Spring):
         pass
 
 
-def window(fail_on: set[int]):
+def window(fail_on: set[int], error=RuntimeError):
     k, c, load = 1.0, 3.0, 1.0  # gain c/k = 3: plain iteration diverges, IQN-ILS converges
-    solid, fluid = Spring(k, load), FlakyFluid(c, fail_on)
+    solid, fluid = Spring(k, load), FlakyFluid(c, fail_on, error)
     settings = CouplingSettings(scheme="iqn-ils", relaxation=0.1, tolerance_rel=1e-8)
     coupling = Coupling(fluid, POINTS, settings)
     stats = coupling.solve_window(solid, 0.1, 1)
@@ -95,3 +102,14 @@ def test_a_failed_iterate_is_halved_and_the_window_still_converges():
 def test_a_failure_on_the_first_iterate_is_a_reported_divergence():
     with pytest.raises(CouplingDivergenceError, match="a solver failed .*Courant 8.5"):
         window({1})
+
+
+def test_a_solver_that_cannot_do_what_it_was_asked_is_not_retried_nor_a_divergence():
+    """A ParticipantSetupError (e.g. OpenFOAM's driver asked for more windows than it planned)
+    does not depend on the iterate: it comes out as it is, at once."""
+
+    class NotPlanned(ParticipantSetupError):
+        pass
+
+    with pytest.raises(NotPlanned, match="Courant 8.5"):
+        window({3}, NotPlanned)

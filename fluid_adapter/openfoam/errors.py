@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fsi_orchestrator.participant import ParticipantSetupError
+
 INSTALL_HINT = (
     "install the Debian package with `apt-get install -y openfoam` (v1912: binaries and "
     "libraries only), or put an OpenFOAM whose `etc/controlDict` lies in /usr/share/openfoam "
@@ -13,7 +15,7 @@ class OpenFoamError(RuntimeError):
     """Base class of everything the OpenFOAM adapter raises on purpose."""
 
 
-class OpenFoamNotFoundError(OpenFoamError):
+class OpenFoamNotFoundError(OpenFoamError, ParticipantSetupError):
     """An OpenFOAM executable or its etc/ folder is missing."""
 
 
@@ -29,5 +31,5 @@ class DivergenceError(OpenFoamError):
     """The flow solution blew up: NaN, or residuals / Courant numbers beyond any sane bound."""
 
 
-class DriverError(OpenFoamError):
+class DriverError(OpenFoamError, ParticipantSetupError):
     """A driver was asked for something it cannot do (e.g. going back in time while running)."""
