@@ -171,7 +171,11 @@ def main() -> None:
         folder = base / name
         # (a killed run may have left the persistent driver's named pipes behind)
         shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
-        rows.append(one_run(name, overrides, args.windows, folder, start))
+        try:
+            rows.append(one_run(name, overrides, args.windows, folder, start))
+        except RuntimeError as err:  # e.g. a checkpoint that does not fit: the others go on
+            print(f"{name:20s} failed: {err}", flush=True)
+            continue
         r = rows[-1]
         print(
             f"{name:20s} {r['status']:24s} solves/window {r['mean_solves']:5.2f}  "
