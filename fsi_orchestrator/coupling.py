@@ -266,18 +266,19 @@ class Coupling:
                     sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
                 )
             initialize(history)
-        x0 = self._exchanged_force(solid)
-        if initialize is not None:
-            initialize({FORCE: x0})
-        self.predictor.record(solid.time, {FIELD: x0})
+        self._start_from_fluid_force(solid)
 
-    def _exchanged_force(self, solid: Participant) -> NDArray:
-        """The exchanged variable of the fluid's last force and the structure's present motion:
-        f, or g = f + M~ a for an *-am scheme."""
+    def _start_from_fluid_force(self, solid: Participant) -> None:
+        """The fluid's last force in this scheme's exchanged variable (f, or g = f + M~ a with
+        the structure's present acceleration for an *-am scheme) becomes the structure's load
+        and the predictor's only value."""
         x = self.mapping.conservative(self.fluid.write_data()[FORCE])
         if self.added_mass_z is not None:
             x[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
-        return x
+        initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
+        if initialize is not None:
+            initialize({FORCE: x})
+        self.predictor.restart(solid.time, {FIELD: x})
 
     def _follow(
         self, motion, times: list[float], dt: float, record_from: float | None = None
@@ -456,11 +457,7 @@ class Coupling:
             if self.accelerator is not None:
                 self.accelerator.load_state(state["accelerator"])
         elif (saved in ADDED_MASS) != self.settings.uses_added_mass:
-            x = self._exchanged_force(solid)
-            initialize = getattr(solid, "initialize_data", None)
-            if initialize is not None:
-                initialize({FORCE: x})
-            self.predictor.restart(solid.time, {FIELD: x})
+            self._start_from_fluid_force(solid)  # the history holds the other variable
 
 
 def peak_speed(motion, times: list[float]) -> float:
