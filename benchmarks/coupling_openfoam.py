@@ -10,7 +10,8 @@ then ``--windows`` coupled windows at 3 Hz: the start-up, where the flow is stil
 ``--from-run DIR`` starts every scheme instead from the checkpoint of a finished ``fsi-run``
 of this case (its output folder, run at the same ``--level`` and ``--mesh-scale``), e.g. one
 run on to its periodic state; each scheme goes on from a copy of its OpenFOAM case. The
-prescribed-motion cost is then that run's lead-in's, and a scheme other than the run's starts
+prescribed-motion cost is then the reference's windows replayed through the fluid alone in this
+run, and a scheme other than the run's starts
 its accelerator afresh (``fsi-run --resume`` with another ``coupling.scheme`` does the same).
 
     .venv/bin/python benchmarks/coupling_openfoam.py [--level coarse] [--mesh-scale 1.5]
@@ -32,6 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
+from fsi_orchestrator.case.timing import case_schedule  # noqa: E402
 from fsi_orchestrator.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
 from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
 from fsi_orchestrator.loop import load_checkpoint  # noqa: E402
@@ -86,7 +88,13 @@ def set_up(name: str, overrides: list[str], folder: Path, start: Path | None, wi
 
 
 def window_s(case) -> float:
-    return 1.0 / (case.actuation.frequency_hz * case.time.steps_per_period)
+    return case_schedule(case)[0]
+
+
+def copy_case(template: Path, folder: Path) -> None:
+    """A scheme's own OpenFOAM case (a killed run may have left the persistent driver's named
+    pipes behind: not copied)."""
+    shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
 
 
 def one_run(
@@ -169,8 +177,7 @@ def main() -> None:
     rows = []
     for name in args.schemes.split(","):
         folder = base / name
-        # (a killed run may have left the persistent driver's named pipes behind)
-        shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
+        copy_case(template, folder)
         try:
             rows.append(one_run(name, overrides, args.windows, folder, start))
         except RuntimeError as err:  # e.g. a checkpoint that does not fit: the others go on
@@ -188,7 +195,7 @@ def main() -> None:
         # the checkpoint's lead-in cost was measured in another run; replay the reference's
         # windows as prescribed motion here, in this run
         folder = base / "prescribed"
-        shutil.copytree(template, folder, symlinks=True, ignore=shutil.ignore_patterns("*.fifo*"))
+        copy_case(template, folder)
         prescribed = prescribed_run(overrides, folder, start, ref["motions"])
         print(f"prescribed motion (the reference's windows replayed): {prescribed:.2f} s/window")
         for r in rows:
