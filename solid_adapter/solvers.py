@@ -218,8 +218,12 @@ def newton(
                 r = None
     raise SolverError(
         f"shell: Newton did not converge {where} in {settings.max_iterations} "
-        f"iterations (last scaled increment {min(size, previous):.2e}); reduce the load or "
-        "time step (analysis.load_steps, time.steps_per_period)"
+        f"iterations (last scaled increment {min(size, previous):.2e}); "
+        + (
+            "reduce the load step (more analysis.load_steps)"
+            if where.startswith("in load step")
+            else "reduce the time step (more time.steps_per_period, or a smaller time.step_s)"
+        )
     )
 
 
