@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 from collections.abc import Iterable
 from pathlib import Path
@@ -11,6 +12,9 @@ from .params import CaseError, build_section
 from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, CouplingScheme, GeometryKind
 
 CASE_FILE = "case.toml"
+MAX_CASE_BYTES = 1_000_000  # a case file is a few kB; anything near this is not one
+MAX_TIME_STEPS = 1_000_000  # windows of one dynamic run (time.periods x time.steps_per_period)
+MAX_SHELL_ELEMENTS = 10_000  # Quad9 elements of an explicit shell mesh (level fine: 32 x 8)
 
 # Geometry keys that only make sense for some kinds: a rectangle with a peduncle is a typo.
 _FISH_ONLY = {
@@ -53,6 +57,10 @@ def parse_override(text: str) -> tuple[str, str, Any]:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()  # e.g. --set fluid.model=potential
+    except RecursionError:
+        raise CaseError(f"--set {key.strip()}: the value is nested too deeply") from None
+    except ValueError as err:  # an integer literal of more than 4300 digits
+        raise CaseError(f"--set {key.strip()}: {err}") from None
     return section, name, value
 
 
@@ -68,8 +76,14 @@ def merge_overrides(raw: dict[str, Any], overrides: Iterable[str]) -> dict[str, 
     return merged
 
 
-def load_case(directory: str | Path, overrides: Iterable[str] = ()) -> Case:
-    """Read ``<directory>/case.toml``; raise CaseError with a one-line message on bad input."""
+def load_case(
+    directory: str | Path, overrides: Iterable[str] = (), *, allow_empty: bool = True
+) -> Case:
+    """Read ``<directory>/case.toml``; raise CaseError with a one-line message on bad input.
+
+    ``allow_empty=False`` (the commands) refuses a case.toml without a single key when no
+    ``--set`` gives one either: an empty file is more likely a mistake than a wish for every
+    default."""
     given = Path(directory)
     path = given if given.name == CASE_FILE else given / CASE_FILE
     if not path.is_file():
@@ -78,11 +92,63 @@ def load_case(directory: str | Path, overrides: Iterable[str] = ()) -> Case:
             f"{CASE_FILE}; see cases/ for examples)"
         )
     directory = path.parent
+    raw = _read_toml(path)
+    overrides = list(overrides)
+    if not raw and not overrides and not allow_empty:
+        raise CaseError(
+            f"{CASE_FILE} is empty ({path}): give at least one key (to run every default on "
+            f'purpose, e.g. [case] title = "defaults"); keys and defaults: docs/case_format.md'
+        )
+    return case_from_dict(merge_overrides(raw, overrides), directory)
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    """The TOML table of a case file, or CaseError naming the file (or the key) in one line."""
     try:
-        raw = tomllib.loads(path.read_text())
+        size = path.stat().st_size
+        if size > MAX_CASE_BYTES:
+            raise CaseError(
+                f"{path}: {size} bytes; a case file is at most {MAX_CASE_BYTES} bytes of TOML"
+            )
+        data = path.read_bytes()
+    except OSError as err:
+        raise CaseError(f"{path}: cannot read it ({err.strerror or err})") from None
+    try:
+        text = data.decode("utf-8-sig")  # a UTF-8 byte-order mark is harmless
+    except UnicodeDecodeError as err:
+        raise CaseError(
+            f"{path}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset {err.start}); "
+            f"{CASE_FILE} must be UTF-8 TOML"
+        ) from None
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise CaseError(f"{CASE_FILE}: not valid TOML: {err}") from None
-    return case_from_dict(merge_overrides(raw, overrides), directory)
+    except RecursionError:
+        where = _key_on_line(text, lambda line: line.count("[") + line.count("{") > 50)
+        raise CaseError(f"{CASE_FILE}: {where or 'a value'} is nested too deeply") from None
+    except ValueError as err:  # an integer literal of more than 4300 digits
+        where = _key_on_line(text, lambda line: re.search(r"\d{1000}", line) is not None)
+        raise CaseError(f"{CASE_FILE}: {where or 'a value'}: {err}") from None
+
+
+_TABLE = re.compile(r"^\s*\[+\s*([A-Za-z0-9_.\- ]+?)\s*\]")
+_KEY = re.compile(r"^\s*([A-Za-z0-9_.\-]+)\s*=")
+
+
+def _key_on_line(text: str, predicate) -> str | None:
+    """``section.key`` whose value is on (or runs into) the first line matching ``predicate``."""
+    table, key = "", None
+    for line in text.splitlines():
+        key_match = _KEY.match(line)
+        table_match = None if key_match else _TABLE.match(line)
+        if table_match and not predicate(line):
+            table, key = table_match.group(1), None
+        elif key_match:
+            key = key_match.group(1)
+        if predicate(line):
+            return None if key is None else f"{table}.{key}" if table else key
+    return None
 
 
 def case_from_dict(raw: dict[str, Any], directory: Path) -> Case:
@@ -130,6 +196,22 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
     t = case.time
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")
+    if case.analysis.kind.value == "dynamic":
+        if t.step_s is not None and t.end_time_s is not None:
+            steps, given = t.end_time_s / t.step_s, "time.end_time_s / time.step_s"
+        else:
+            steps, given = t.periods * t.steps_per_period, "time.periods x time.steps_per_period"
+        if steps > MAX_TIME_STEPS:
+            raise CaseError(
+                f"{given} asks for {steps:.3g} time steps; at most {MAX_TIME_STEPS:g} in one run"
+            )
+    m = case.mesh
+    elements = (m.elements_length or 1) * (m.elements_width or 1)
+    if elements > MAX_SHELL_ELEMENTS:
+        raise CaseError(
+            f"mesh.elements_length x mesh.elements_width = {elements} shell elements (about "
+            f"{elements * 4 * 6:.2g} unknowns); at most {MAX_SHELL_ELEMENTS} (level fine: 32 x 8)"
+        )
     if t.periodic_tolerance is not None and t.step_s is not None:
         raise CaseError(
             "time.periodic_tolerance counts periods of the drive (time.periods); a run given "

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 import types
 import typing
 from dataclasses import dataclass
@@ -68,6 +69,23 @@ def _describe(tp: Any) -> str:
     return {float: "number", int: "integer", str: "string", bool: "true/false"}.get(tp, str(tp))
 
 
+# the largest integer an integer key takes (a C int: numpy, MPI and OpenFOAM need no more)
+INT_LIMIT = 2**31 - 1
+
+
+def _show(value: Any) -> str:
+    """A value for a one-line message: never long, never raising (huge ints, deep nesting)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**16:
+        return f"an integer of about {value.bit_length() * math.log10(2):.0f} digits"
+    if isinstance(value, float):
+        return f"{value:g}"
+    try:
+        text = repr(value)
+    except (RecursionError, ValueError):
+        text = f"a {type(value).__name__}"
+    return text if len(text) <= 60 else text[:56] + " ..."
+
+
 def coerce(key: str, value: Any, tp: Any, spec: ParamSpec) -> Any:
     """Convert a TOML value to the declared type, or raise CaseError naming ``key``."""
     origin = typing.get_origin(tp)
@@ -80,52 +98,71 @@ def coerce(key: str, value: Any, tp: Any, spec: ParamSpec) -> Any:
         try:
             return tp(value)
         except ValueError:
-            raise CaseError(f"{key} must be one of {_describe(tp)}, got {value!r}") from None
+            raise CaseError(f"{key} must be one of {_describe(tp)}, got {_show(value)}") from None
     if origin is tuple:
         if not isinstance(value, list | tuple):
-            raise CaseError(f"{key} must be a {_describe(tp)}, got {value!r}")
+            raise CaseError(f"{key} must be a {_describe(tp)}, got {_show(value)}")
         if spec.length is not None and len(value) != spec.length:
             raise CaseError(f"{key} must have {spec.length} entries, got {len(value)}")
         item = typing.get_args(tp)[0]
         return tuple(coerce(f"{key}[{i}]", v, item, spec) for i, v in enumerate(value))
     if tp is bool:
         if not isinstance(value, bool):
-            raise CaseError(f"{key} must be true or false, got {value!r}")
+            raise CaseError(f"{key} must be true or false, got {_show(value)}")
         return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise CaseError(f"{key} must be an integer, got {value!r}")
+            raise CaseError(f"{key} must be an integer, got {_show(value)}")
         _check_bounds(key, value, spec)
+        if abs(value) > INT_LIMIT:
+            raise CaseError(f"{key} must lie within +-{INT_LIMIT}, got {_show(value)}")
         return value
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise CaseError(f"{key} must be a number, got {value!r}")
-        if not math.isfinite(value):
-            raise CaseError(f"{key} must be finite, got {value!r}")
-        _check_bounds(key, float(value), spec)
+            raise CaseError(f"{key} must be a number, got {_show(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise CaseError(f"{key} must be finite, got {_show(value)}")
+        _check_bounds(key, value, spec)  # an int compares exactly, however large
+        if abs(value) > sys.float_info.max:  # an integer literal such as 10**400
+            raise CaseError(f"{key} must be a number within float range, got {_show(value)}")
         return float(value)
     if tp is str:
         if not isinstance(value, str):
-            raise CaseError(f"{key} must be a string, got {value!r}")
+            raise CaseError(f"{key} must be a string, got {_show(value)}")
+        if "\0" in value:
+            raise CaseError(f"{key} must not contain a NUL character")
         return value
     raise TypeError(f"unsupported parameter type {tp!r} for {key}")  # programming error
 
 
 def _check_bounds(key: str, v: float, spec: ParamSpec) -> None:
+    shown, span = _show(v), _range(spec)
+    # a sign error ("must be > 0, got -3") needs no range; every other violation gives it
     if spec.gt is not None and not v > spec.gt:
-        raise CaseError(f"{key} must be > {spec.gt:g}, got {v:g}")
+        raise CaseError(f"{key} must be > {spec.gt:g}, got {shown}{span if spec.gt else ''}")
     if spec.ge is not None and not v >= spec.ge:
-        raise CaseError(f"{key} must be >= {spec.ge:g}, got {v:g}")
+        raise CaseError(f"{key} must be >= {spec.ge:g}, got {shown}{span if spec.ge else ''}")
     if spec.lt is not None and not v < spec.lt:
-        raise CaseError(f"{key} must be < {spec.lt:g}, got {v:g}")
+        raise CaseError(f"{key} must be < {spec.lt:g}, got {shown}{span}")
     if spec.le is not None and not v <= spec.le:
-        raise CaseError(f"{key} must be <= {spec.le:g}, got {v:g}")
+        raise CaseError(f"{key} must be <= {spec.le:g}, got {shown}{span}")
+
+
+def _range(spec: ParamSpec) -> str:
+    """`` (range: 0 < x <= 1000 Hz)`` where both ends are declared, else nothing."""
+    low = f"{spec.gt:g} < " if spec.gt is not None else None
+    low = f"{spec.ge:g} <= " if spec.ge is not None else low
+    high = f" < {spec.lt:g}" if spec.lt is not None else None
+    high = f" <= {spec.le:g}" if spec.le is not None else high
+    if low is None or high is None:
+        return ""
+    return f" (range: {low}x{high}{' ' + spec.unit if spec.unit else ''})"
 
 
 def build_section(cls: type, name: str, raw: dict[str, Any]) -> Any:
     """Build the frozen dataclass ``cls`` for section ``name`` from a TOML table."""
     if not isinstance(raw, dict):
-        raise CaseError(f"[{name}] must be a table, got {raw!r}")
+        raise CaseError(f"[{name}] must be a table, got {_show(raw)}")
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = sorted(set(raw) - set(fields))
