@@ -59,6 +59,8 @@ def _bounds(spec) -> str:
     parts = []
     for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         v = getattr(spec, name)
+        if name == "gt" and spec.ge is not None and v is not None and spec.ge > v:
+            continue  # "> 0" for the sign, ">= 0.01" the sane end: the reader needs the latter
         if v is not None:
             parts.append(f"{op} {v:g}")
     return ", ".join(parts)

@@ -150,72 +150,98 @@ class Geometry:
         "rectangle: plate length along x; beam: CFRP length (default 0.087, Table 3.2).",
         unit="m",
         gt=0,
+        le=100,
     )
     width_m: float | None = param(
-        None, "rectangle: plate width along y; beam: CFRP width (default 0.008).", unit="m", gt=0
+        None,
+        "rectangle: plate width along y; beam: CFRP width (default 0.008).",
+        unit="m",
+        gt=0,
+        le=100,
     )
     thickness_m: float | None = param(
         None,
         "rectangle: plate thickness; fish and beam: CFRP core "
         "thickness (default 0.2e-3, or the preset's).",
         unit="m",
-        gt=0,
+        ge=1e-6,
+        le=1,
     )
-    body_length_m: float | None = param(None, "fish: nose to trailing edge.", unit="m", gt=0)
-    max_height_m: float | None = param(None, "fish: largest body height.", unit="m", gt=0)
+    body_length_m: float | None = param(
+        None, "fish: nose to trailing edge.", unit="m", ge=1e-3, le=1
+    )
+    max_height_m: float | None = param(None, "fish: largest body height.", unit="m", ge=1e-3, le=1)
     peduncle_height_m: float | None = param(
-        None, "fish: height at the caudal peduncle.", unit="m", gt=0
+        None, "fish: height at the caudal peduncle.", unit="m", ge=1e-4, le=1
     )
     caudal_fin_height_m: float | None = param(
-        None, "fish: height of the (straight) trailing edge of the caudal fin.", unit="m", gt=0
+        None,
+        "fish: height of the (straight) trailing edge of the caudal fin.",
+        unit="m",
+        ge=1e-4,
+        le=1,
     )
     head_length_m: float | None = param(
-        None, "fish: nose to the point of maximum height (elliptic head).", unit="m", gt=0
+        None, "fish: nose to the point of maximum height (elliptic head).", unit="m", ge=1e-4, le=1
     )
     taper_start_x_m: float | None = param(
-        None, "fish: x where the body starts to taper toward the peduncle.", unit="m", gt=0
+        None, "fish: x where the body starts to taper toward the peduncle.", unit="m", ge=1e-4, le=1
     )
     peduncle_x_m: float | None = param(
-        None, "fish: x of the caudal peduncle (narrowest section).", unit="m", gt=0
+        None, "fish: x of the caudal peduncle (narrowest section).", unit="m", ge=1e-4, le=1
     )
     nose_height_fraction: float | None = param(
         None, "fish: height at the nose as a fraction of max_height_m (blunt nose).", gt=0, lt=1
     )
     mfc_thickness_m: float | None = param(
-        None, "Thickness of each MFC layer (Table 3.1: 0.3e-3).", unit="m", gt=0
+        None, "Thickness of each MFC layer (Table 3.1: 0.3e-3).", unit="m", ge=1e-6, le=0.01
     )
     actuator_length_m: float | None = param(
         None,
         "MFC package length along x (fish: 0.112, Table 3.4; beam: 0.085, Table 3.2).",
         unit="m",
-        gt=0,
+        ge=1e-4,
+        le=1,
     )
     actuator_width_m: float | None = param(
-        None, "MFC package width (fish: 0.040; beam: 0.007).", unit="m", gt=0
+        None, "MFC package width (fish: 0.040; beam: 0.007).", unit="m", ge=1e-4, le=1
     )
     active_length_m: float | None = param(
-        None, "fish: piezo-active length inside the package (Table 3.4: 0.085).", unit="m", gt=0
+        None,
+        "fish: piezo-active length inside the package (Table 3.4: 0.085).",
+        unit="m",
+        ge=1e-4,
+        le=1,
     )
     active_width_m: float | None = param(
-        None, "fish: piezo-active width (Table 3.4: 0.028).", unit="m", gt=0
+        None, "fish: piezo-active width (Table 3.4: 0.028).", unit="m", ge=1e-4, le=1
     )
     actuator_start_x_m: float | None = param(
         None,
         "x of the package's front edge (beam: set back from the clamp, default 0.4e-3).",
         unit="m",
         ge=0,
+        le=1,
     )
     actuator_sides: ActuatorSides | None = param(
         None, "MFC on both faces (fish default) or on the +z face only (beam default)."
     )
     head_weight_radius_m: float | None = param(
-        None, "fish: radius of the steel head weight (disk).", unit="m", gt=0
+        None, "fish: radius of the steel head weight (disk).", unit="m", ge=1e-4, le=0.1
     )
     head_weight_thickness_m: float | None = param(
-        None, "fish: thickness of the head weight (Tables 3.5/3.9: 2.5e-3).", unit="m", ge=0
+        None,
+        "fish: thickness of the head weight (Tables 3.5/3.9: 2.5e-3).",
+        unit="m",
+        ge=0,
+        le=0.05,
     )
     head_weight_x_m: float | None = param(
-        None, "fish: x of the head weight's centre (default radius + 3 mm).", unit="m", gt=0
+        None,
+        "fish: x of the head weight's centre (default radius + 3 mm).",
+        unit="m",
+        ge=1e-4,
+        le=1,
     )
 
 
@@ -225,19 +251,21 @@ class Material:
         None,
         "rectangle: Young's modulus (required); fish/beam: overrides the CFRP core's.",
         unit="Pa",
-        gt=0,
+        ge=1e3,
+        le=1e13,
     )
     poisson_ratio: float | None = param(
         None,
         "rectangle: Poisson ratio (required); fish/beam: overrides the CFRP core's.",
-        ge=-1,
+        gt=-1,
         lt=0.5,
     )
     density_kg_m3: float | None = param(
         None,
         "rectangle: density (required); fish/beam: overrides the CFRP core's.",
         unit="kg/m^3",
-        gt=0,
+        ge=1e-3,
+        le=1e5,
     )
     cfrp: CfrpProperties | None = param(
         None, "CFRP property set for fish/beam (default: fsi for the fish, beam for the beam)."
@@ -246,7 +274,7 @@ class Material:
 
 @dataclass(frozen=True, kw_only=True)
 class Actuation:
-    frequency_hz: float = param(3.0, "Driving frequency.", unit="Hz", gt=0)
+    frequency_hz: float = param(3.0, "Driving frequency.", unit="Hz", gt=0, ge=0.01, le=1000)
     waveform: Waveform = param(Waveform.SINE, "Voltage waveform of both actuators.")
     left_volts: tuple[float, ...] = param(
         (-500.0, 1500.0), "[min, max] voltage of the left (+z face) MFC.", unit="V", length=2
@@ -271,19 +299,29 @@ class Actuation:
         "1800 ppm free strain over 2000 V with d33 = 460 pm/V "
         "implies W = 0.51 mm.",
         unit="m",
-        gt=0,
+        ge=1e-6,
+        le=0.01,
     )
     d33_m_per_v: float = param(
-        460e-12, "Piezo constant along the fibres (Table 3.1, high field).", unit="m/V"
+        460e-12,
+        "Piezo constant along the fibres (Table 3.1, high field).",
+        unit="m/V",
+        ge=-1e-8,
+        le=1e-8,
     )
     d31_m_per_v: float = param(
-        -210e-12, "Piezo constant across the fibres (Table 3.1, high field).", unit="m/V"
+        -210e-12,
+        "Piezo constant across the fibres (Table 3.1, high field).",
+        unit="m/V",
+        ge=-1e-8,
+        le=1e-8,
     )
     ramp_periods: float = param(
         0.0,
         "Periods over which the voltage amplitude ramps up from 0 "
         "(0: switched on at t = 0 like the seed).",
         ge=0,
+        le=1000,
     )
 
 
@@ -294,6 +332,8 @@ class Loads:
         "rectangle/beam: total dead force on the free edge along +z, "
         "spread uniformly over the edge.",
         unit="N",
+        ge=-1e6,
+        le=1e6,
     )
     tip_moment_nm: float = param(
         0.0,
@@ -301,9 +341,15 @@ class Loads:
         "width axis; positive bends toward +z (follows the edge's "
         "rotation).",
         unit="N m",
+        ge=-1e6,
+        le=1e6,
     )
     pressure_pa: float = param(
-        0.0, "Uniform follower pressure on the plate, along the current +z-side normal.", unit="Pa"
+        0.0,
+        "Uniform follower pressure on the plate, along the current +z-side normal.",
+        unit="Pa",
+        ge=-1e7,
+        le=1e7,
     )
 
 
@@ -322,6 +368,7 @@ class Boundary:
         "the head weight's rear edge); rectangle/beam: 0.",
         unit="m",
         ge=0,
+        le=100,
     )
 
 
@@ -333,7 +380,7 @@ class Analysis:
         "(implicit time integration, Newton each step) or modal (in "
         'vacuum, or wet with fluid.model = "potential").',
     )
-    load_steps: int = param(10, "static: number of load increments.", ge=1)
+    load_steps: int = param(10, "static: number of load increments.", ge=1, le=10_000)
     num_modes: int = param(6, "modal: number of elastic modes reported.", ge=1, le=200)
     integrator: Integrator = param(
         Integrator.GENERALIZED_ALPHA,
@@ -350,9 +397,11 @@ class Analysis:
         le=1,
     )
     newton_tolerance: float = param(
-        1e-8, "Relative tolerance on the Newton increment and energy norm.", gt=0, lt=1
+        1e-8, "Relative tolerance on the Newton increment and energy norm.", ge=1e-14, lt=1
     )
-    max_newton_iterations: int = param(30, "Newton iterations per step before giving up.", ge=1)
+    max_newton_iterations: int = param(
+        30, "Newton iterations per step before giving up.", ge=1, le=1000
+    )
     reuse_tangent: bool = param(
         True,
         "dynamic (generalized-alpha, newmark): Newton keeps its factored tangent (modified "
@@ -361,20 +410,28 @@ class Analysis:
         "same answer to the Newton tolerance; a coupled window's structure costs a third less.",
     )
     rayleigh_alpha_per_s: float = param(
-        0.0, "Mass-proportional Rayleigh damping.", unit="1/s", ge=0
+        0.0, "Mass-proportional Rayleigh damping.", unit="1/s", ge=0, le=1e6
     )
-    rayleigh_beta_s: float = param(0.0, "Stiffness-proportional Rayleigh damping.", unit="s", ge=0)
+    rayleigh_beta_s: float = param(
+        0.0, "Stiffness-proportional Rayleigh damping.", unit="s", ge=0, le=1
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
 class Time:
-    periods: float = param(3.0, "dynamic: simulated time in driving periods.", gt=0)
-    steps_per_period: int = param(40, "dynamic: time steps (coupling windows) per period.", ge=4)
+    periods: float = param(3.0, "dynamic: simulated time in driving periods.", gt=0, le=10_000)
+    steps_per_period: int = param(
+        40, "dynamic: time steps (coupling windows) per period.", ge=4, le=100_000
+    )
     step_s: float | None = param(
-        None, "dynamic without actuation: time step (overrides steps_per_period).", unit="s", gt=0
+        None,
+        "dynamic without actuation: time step (overrides steps_per_period).",
+        unit="s",
+        ge=1e-9,
+        le=10,
     )
     end_time_s: float | None = param(
-        None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0
+        None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0, le=1e4
     )
     periodic_tolerance: float | None = param(
         None,
@@ -396,35 +453,46 @@ class Time:
 @dataclass(frozen=True, kw_only=True)
 class ShellMesh:
     level: MeshLevel = param(MeshLevel.DEFAULT, "Shell mesh level (see docs for element counts).")
-    elements_length: int | None = param(None, "Quad9 elements along x (overrides level).", ge=1)
-    elements_width: int | None = param(None, "Quad9 elements across y (overrides level).", ge=1)
+    elements_length: int | None = param(
+        None, "Quad9 elements along x (overrides level).", ge=1, le=400
+    )
+    elements_width: int | None = param(
+        None, "Quad9 elements across y (overrides level).", ge=1, le=400
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
 class Fluid:
     model: FluidModel = param(FluidModel.NONE, "Fluid around the plate.")
-    density_kg_m3: float = param(1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", gt=0)
-    kinematic_viscosity_m2_s: float = param(0.75e-6, "FC-3283 (Table 3.6).", unit="m^2/s", gt=0)
+    density_kg_m3: float = param(
+        1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", ge=1e-3, le=1e5
+    )
+    kinematic_viscosity_m2_s: float = param(
+        0.75e-6, "FC-3283 (Table 3.6).", unit="m^2/s", ge=1e-9, le=1
+    )
     mesh_level: MeshLevel = param(MeshLevel.DEFAULT, "Fluid mesh level.")
     domain: FluidDomain = param(
         FluidDomain.SPHERE,
         "potential: fluid domain (the seed's modal sphere or the experiment's tank).",
     )
     domain_diameter_m: float = param(
-        0.2, "potential, sphere: diameter (Sec. 3.4.2.1: 0.2).", unit="m", gt=0
+        0.2, "potential, sphere: diameter (Sec. 3.4.2.1: 0.2).", unit="m", gt=0, le=2
     )
     tank_length_m: float = param(
-        0.59, "Tank size along the body axis x (Sec. 3.5.2.2).", unit="m", gt=0
+        0.59, "Tank size along the body axis x (Sec. 3.5.2.2).", unit="m", ge=0.01, le=2
     )
     tank_depth_m: float = param(
-        0.44, "Tank size along y (vertical; open top at +y).", unit="m", gt=0
+        0.44, "Tank size along y (vertical; open top at +y).", unit="m", ge=0.01, le=2
     )
-    tank_width_m: float = param(0.133, "Tank size along z (the swing direction).", unit="m", gt=0)
+    tank_width_m: float = param(
+        0.133, "Tank size along z (the swing direction).", unit="m", ge=0.01, le=2
+    )
     tank_nose_x_m: float | None = param(
         None,
         "x of the fish's nose from the tank's front wall (default: fish centred in the tank).",
         unit="m",
         gt=0,
+        le=2,
     )
     damping_ratio: float = param(
         0.0,
@@ -434,7 +502,7 @@ class Fluid:
         lt=1,
     )
     added_mass_coefficient: float = param(
-        1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0
+        1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )
     turbulence: Turbulence = param(
         Turbulence.K_OMEGA_SST,
@@ -450,12 +518,13 @@ class Fluid:
         "run as `nobody`).",
     )
     processes: int = param(
-        1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1
+        1, "openfoam: MPI ranks for pimpleFoam (decomposePar, hierarchical).", ge=1, le=1024
     )
     mesh_scale: float = param(
         1.0,
         "openfoam: multiplies every cell size of fluid.mesh_level (1.5: about 1/3 the cells).",
-        gt=0,
+        ge=0.5,
+        le=10,
     )
     max_courant: float = param(
         2.0,
@@ -463,7 +532,8 @@ class Fluid:
         "into as many fluid steps as this needs (the interface moves linearly within a window). "
         "Two-way coupled runs want one step per window (a large value): sub-stepped windows "
         "made converged coupled runs oscillate (docs/coupling.md).",
-        gt=0,
+        ge=0.01,
+        le=1e6,
     )
 
 
@@ -479,13 +549,14 @@ class Coupling:
         le=1,
     )
     tolerance_rel: float = param(
-        1e-4, "Relative convergence tolerance of the exchanged data.", gt=0, lt=1
+        1e-4, "Relative convergence tolerance of the exchanged data.", ge=1e-14, lt=1
     )
     max_iterations: int = param(
         50,
         "Coupling iterations per window; a window that has not converged by then is accepted, "
         "counted and reported (divergence - NaN or growth - stops the run).",
         ge=1,
+        le=10_000,
     )
     predictor: Extrapolation = param(
         Extrapolation.PERIODIC,
@@ -494,7 +565,9 @@ class Coupling:
         "extrapolation in time, whichever predicted the last window best (explicit schemes: "
         "the period rule or the last value; extrapolation destabilises them).",
     )
-    reuse_windows: int = param(8, "iqn-ils: past windows whose secant information is reused.", ge=0)
+    reuse_windows: int = param(
+        8, "iqn-ils: past windows whose secant information is reused.", ge=0, le=1000
+    )
     partitioned: bool = param(
         False,
         "potential/slender_body: run the liquid as a separate participant through the "
@@ -522,6 +595,7 @@ class Coupling:
         "coupling.tolerance_rel. A cheap start-up for long runs (default level, 4 periods: "
         "29 % less wall time; docs/coupling.md).",
         ge=0,
+        le=10_000,
     )
     jacobian_from: str = param(
         "",
@@ -545,13 +619,14 @@ class Output:
         "Write VTU/PVD series of the shell (vtk/shell.pvd) and, in partitioned runs, of the "
         "fluid's loads on the interface (vtk/fluid.pvd).",
     )
-    vtk_every: int = param(1, "Write VTU every n windows.", ge=1)
+    vtk_every: int = param(1, "Write VTU every n windows.", ge=1, le=1_000_000)
     checkpoint_every: int = param(
         10,
         "Write a restart checkpoint every n windows. The structure factors a fresh tangent after "
         "each (analysis.reuse_tangent), so that --resume repeats the run exactly; runs with "
         "different n agree to the Newton tolerance.",
         ge=1,
+        le=1_000_000,
     )
     flow_every: int = param(
         10,
@@ -559,6 +634,7 @@ class Output:
         "plane through the plate's centre height, and vtk/flow_wake.pvd, across the tank 20 mm "
         "behind the tail) every n windows; 0: none.",
         ge=0,
+        le=1_000_000,
     )
 
 
