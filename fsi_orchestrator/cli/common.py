@@ -35,7 +35,64 @@ def base_parser(prog: str, description: str) -> argparse.ArgumentParser:
 
 
 def load(args: argparse.Namespace) -> Case:
-    return load_case(args.case, args.overrides)
+    """The validated case of a command: an empty case.toml is refused, and so is a plate that
+    does not fit its clamp or its fluid domain (one line, exit 2, before any solver runs)."""
+    case = load_case(args.case, args.overrides, allow_empty=False)
+    check_plausible(case)
+    return case
+
+
+# clearance between the plate and the fluid domain's boundary, as a share of the body length
+DOMAIN_MARGIN = 0.05
+
+
+def check_plausible(case: Case) -> None:
+    """Checks across keys that need the resolved plate (a preset's body length): the clamp
+    leaves part of the plate free, the tank or sphere holds the plate with a margin."""
+    from solid_adapter.geometry import build_layout  # the composition root may know adapters
+
+    from ..case.schema import FluidDomain, FluidModel
+
+    layout = build_layout(case)  # raises CaseError naming the key when the outline is wrong
+    length = layout.length_m
+    if layout.clamp_x_m is not None and layout.clamp_x_m >= length:
+        raise CaseError(
+            f"case.toml: boundary.clamp_length_m ({layout.clamp_x_m:g} m) must be shorter than "
+            f"the plate ({length:g} m), or nothing is free to move"
+        )
+    f = case.fluid
+    margin = DOMAIN_MARGIN * length
+    height = float(np.max(layout.height(np.linspace(0.0, length, 201))))
+    if f.model is FluidModel.POTENTIAL and f.domain is FluidDomain.SPHERE:
+        reach = float(np.hypot(length / 2, height / 2))  # centre to the farthest corner
+        if f.domain_diameter_m / 2 < reach + margin:
+            raise CaseError(
+                f"case.toml: fluid.domain_diameter_m ({f.domain_diameter_m:g} m) must hold the "
+                f"{length:g} m plate with a margin: at least {2 * (reach + margin):.3g} m"
+            )
+    elif f.model is FluidModel.OPENFOAM or (
+        f.model is FluidModel.POTENTIAL and f.domain is FluidDomain.TANK
+    ):
+        nose = f.tank_nose_x_m if f.tank_nose_x_m is not None else (f.tank_length_m - length) / 2
+        tail = f.tank_length_m - nose - length
+        if min(nose, tail) < margin:
+            key = "fluid.tank_nose_x_m" if f.tank_nose_x_m is not None else "fluid.tank_length_m"
+            raise CaseError(
+                f"case.toml: {key}: the tank ({f.tank_length_m:g} m long, nose at "
+                f"{nose:g} m) must hold the {length:g} m plate with {margin:.3g} m to spare "
+                f"ahead and behind"
+            )
+        if f.tank_depth_m < height + 2 * margin:
+            raise CaseError(
+                f"case.toml: fluid.tank_depth_m ({f.tank_depth_m:g} m) must hold the plate's "
+                f"{height:g} m height with {margin:.3g} m to spare: at least "
+                f"{height + 2 * margin:.3g} m"
+            )
+        if f.tank_width_m < 8 * margin:  # the tail of the seed's fish swings about 20 mm
+            raise CaseError(
+                f"case.toml: fluid.tank_width_m ({f.tank_width_m:g} m) leaves the plate less "
+                f"than {4 * margin:.3g} m to swing on either side: at least {8 * margin:.3g} m"
+            )
 
 
 def to_jsonable(value: Any) -> Any:
