@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
+from .buckling import check_mean_voltage
 from .geometry import build_layout
 from .harmonic import ModalCorrection, PeriodicResponse, mean_volts, periodic_response
 from .mesh import build_mesh
@@ -110,6 +111,7 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
     if not has_actuators(case):
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
     drive = DriveSignal.from_case(case)
+    check_mean_voltage(model, drive.mean)
     if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
         orbit = periodic_orbit(case, model, drive, loads, integrator)
         return ShellParticipant(model, integrator, drive.volts, loads, orbit=orbit)
@@ -137,6 +139,7 @@ def mean_voltage_equilibrium(
 ) -> NDArray:
     """The static state under the drive's mean voltages (and the static loads)."""
     mean = mean_volts(drive)
+    check_mean_voltage(model, mean)
     return solve_static(
         model, static_load_function(model, loads), lambda lam: lam * mean, 4, newton_settings(case)
     )

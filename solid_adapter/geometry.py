@@ -168,6 +168,7 @@ class PlateLayout:
     clamp_x_m: float | None  # nodes with x <= clamp_x are clamped; None: free
     head_weight_mass_kg: float = 0.0
     description: str = ""
+    drive_model: str = "induced-strain"  # or "seed-stress" (ShellModel.dead_drive_per_volt)
 
     def height(self, x: NDArray) -> NDArray:
         return self.height_fn(x)  # type: ignore[operator]
@@ -407,7 +408,9 @@ def piezo_constants(case: Case) -> PiezoConstants:
 def build_layout(case: Case) -> PlateLayout:
     piezo = piezo_constants(case)
     if case.geometry.kind is GeometryKind.FISH:
-        return _fish_layout(case, piezo)
-    if case.geometry.kind is GeometryKind.BEAM:
-        return _beam_layout(case, piezo)
-    return _rectangle_layout(case)
+        layout = _fish_layout(case, piezo)
+    elif case.geometry.kind is GeometryKind.BEAM:
+        layout = _beam_layout(case, piezo)
+    else:
+        return _rectangle_layout(case)
+    return replace(layout, drive_model=case.actuation.drive_model.value)

@@ -159,8 +159,7 @@ def _damping_scale(correction: ModalCorrection, free: NDArray, solved: list) -> 
 
 
 def mean_volts(drive: DriveSignal) -> NDArray:
-    (lo_l, hi_l), (lo_r, hi_r) = drive.left_volts, drive.right_volts
-    return np.array([(lo_l + hi_l) / 2, (lo_r + hi_r) / 2])
+    return drive.mean
 
 
 def mean_voltage_tangent(model: ShellModel, x_static: NDArray, drive: DriveSignal) -> sp.spmatrix:

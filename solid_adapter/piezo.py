@@ -23,6 +23,9 @@ class DriveSignal:
     left_volts: tuple[float, float]
     right_volts: tuple[float, float]
     ramp_periods: float = 0.0
+    # share of the mean voltage's induced strain the laminate holds in the periodic state
+    # (actuation.mean_strain_transfer): the rest is taken up by creep of the bond and matrix
+    mean_transfer: float = 1.0
 
     @classmethod
     def from_case(cls, case: Case) -> DriveSignal:
@@ -33,6 +36,14 @@ class DriveSignal:
             left_volts=tuple(a.left_volts),
             right_volts=tuple(a.right_volts),  # type: ignore[arg-type]
             ramp_periods=a.ramp_periods,
+            mean_transfer=a.mean_strain_transfer,
+        )
+
+    @property
+    def mean(self) -> NDArray:
+        """[V_left, V_right] of the mean the laminate holds (mean_transfer of the drive's)."""
+        return self.mean_transfer * np.array(
+            [sum(self.left_volts) / 2, sum(self.right_volts) / 2]
         )
 
     def shape(self, t: float) -> float:
@@ -49,9 +60,10 @@ class DriveSignal:
         if self.ramp_periods > 0:
             ramp = min(1.0, t * self.frequency_hz / self.ramp_periods)
         out = []
-        for (lo, hi), sign in ((self.left_volts, 1.0), (self.right_volts, -1.0)):
-            mid, amp = (hi + lo) / 2, (hi - lo) / 2
-            out.append(ramp * (mid + sign * amp * w))
+        for (lo, hi), sign, mid in zip(
+            (self.left_volts, self.right_volts), (1.0, -1.0), self.mean, strict=True
+        ):
+            out.append(ramp * (mid + sign * (hi - lo) / 2 * w))
         return np.array(out)
 
     @property

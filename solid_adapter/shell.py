@@ -139,6 +139,15 @@ class ShellModel:
         # integrator's own acceleration
         self.added_mass_stencil: tuple[float, ...] | None = None
         self.inertia = self.mass  # structural mass plus any fluid added mass
+        # seed-stress drive (seed Sec. 3.5.2.1): eq. 3-10's stress applied as dead loads, the
+        # internal force of the flat plate under each actuator's unit voltage (2, ndof);
+        # None: the induced strain (eigenstrain) of the MFC layers
+        self.dead_drive_per_volt: NDArray | None = None
+        if layout.drive_model == "seed-stress":
+            zero = self.zero_state()
+            self.dead_drive_per_volt = np.array(
+                [self._internal(zero, np.eye(2)[s], tangent=False)[0] for s in range(2)]
+            )
 
     def set_added_mass(self, matrix_z: NDArray | None) -> None:
         """Add a fluid added-mass operator acting on the nodal normal (z) accelerations
@@ -174,8 +183,17 @@ class ShellModel:
 
         ``mixed``: stresses (one array per energy part) to build the geometric part of the
         tangent with instead of the stresses of x (mixed-integration-point Newton, see
-        :class:`MixedNewtonInternal`). The force always uses the stresses of x.
+        :class:`MixedNewtonInternal`). The force always uses the stresses of x. With the
+        seed-stress drive the voltages enter as dead loads (minus the applied force).
         """
+        if self.dead_drive_per_volt is None:
+            return self._internal(x, volts, tangent, mixed)
+        r, K, lin = self._internal(x, np.zeros(2), tangent, mixed)
+        return r + np.asarray(volts) @ self.dead_drive_per_volt, K, lin
+
+    def _internal(
+        self, x: NDArray, volts: NDArray, tangent: bool = True, mixed: list[NDArray] | None = None
+    ) -> tuple[NDArray, sp.csr_matrix | None, Linearization | None]:
         X = self.nodal(x)
         d, J, H = director(X[:, 3:])
         ue, de = X[self.enodes, :3], d[self.enodes]
@@ -258,8 +276,11 @@ class ShellModel:
         """Stored energy, integrated exactly as the internal forces are."""
         X = self.nodal(x)
         d = director(X[:, 3:])[0]
-        parts = self._parts(X[self.enodes, :3], d[self.enodes], volts, with_b=False)
-        return float(sum(p.energy() for p in parts))
+        dead = self.dead_drive_per_volt
+        own = volts if dead is None else np.zeros(2)
+        parts = self._parts(X[self.enodes, :3], d[self.enodes], own, with_b=False)
+        energy = float(sum(p.energy() for p in parts))
+        return energy if dead is None else energy + float(np.asarray(volts) @ dead @ x)
 
     # ------------------------------------------------------------------ mass and loads
     def _scalar_mass(self, density: NDArray, q: QuadratureData | None = None) -> sp.csr_matrix:

@@ -61,6 +61,11 @@ class Waveform(StrEnum):
     SQUARE = "square"
 
 
+class DriveModel(StrEnum):
+    INDUCED_STRAIN = "induced-strain"  # MFC layers with a free (eigen)strain d E_V
+    SEED_STRESS = "seed-stress"  # eq. 3-10's stress applied as dead loads (Sec. 3.5.2.1)
+
+
 class StartMode(StrEnum):
     PERIODIC = "periodic"  # on the linear periodic orbit: the first periods are steady state
     REST = "rest"  # at rest in static equilibrium under the voltages of t = 0 (the seed)
@@ -315,6 +320,26 @@ class Actuation:
         unit="m/V",
         ge=-1e-8,
         le=1e-8,
+    )
+    drive_model: DriveModel = param(
+        DriveModel.INDUCED_STRAIN,
+        "How the MFC drives the laminate: induced-strain (each active layer has the free "
+        "strain [d33, d31] V/W, eq. 3-9, and is held by the plate: a mean voltage prestresses "
+        "it) or seed-stress (the seed's form, Sec. 3.1.3/3.5.2.1: eq. 3-10's stress applied to "
+        "the MFC as dead loads: the same linear response, but the loads stretch the laminate "
+        "where the induced strain of a free strip stresses nothing). docs/validation.md, "
+        "'Drive model'.",
+    )
+    mean_strain_transfer: float = param(
+        1.0,
+        "Share of the mean voltage's induced strain (the +500 V of -500..+1500 V) that the "
+        "laminate holds in the periodic state; the oscillating part is always transmitted. "
+        "1: an elastic bond (the mean expansion, held back by the passive plate around the "
+        "active area, prestresses it); 0: the epoxy bond and the MFC's matrix creep under the "
+        "sustained mean stress and the laminate carries none of it. A 0.1 mm CFRP core "
+        "buckles under the full mean (docs/validation.md, 'Drive model').",
+        ge=0,
+        le=1,
     )
     ramp_periods: float = param(
         0.0,

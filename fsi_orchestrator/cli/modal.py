@@ -12,6 +12,9 @@ from .compose import shell_with_fast_fluid, without_cfd
 
 
 def modal_summary(case) -> dict:
+    from solid_adapter.buckling import buckling_factor
+    from solid_adapter.build import has_actuators
+    from solid_adapter.piezo import DriveSignal
     from solid_adapter.solvers import modal_analysis, mode_kind
 
     start = time.perf_counter()
@@ -31,6 +34,11 @@ def modal_summary(case) -> dict:
         summary["added_mass_kg"] = added.total()
         summary["plate_mass_kg"] = model.total_mass_kg()
         summary["fluid_nodes"] = added.n_fluid_nodes
+    if has_actuators(case):
+        # the load factor at which the drive's mean voltage buckles the flat plate (> 1: held)
+        # (null: the mean prestress does not buckle it at any factor)
+        factor = buckling_factor(model, DriveSignal.from_case(case).mean)
+        summary["mean_voltage_buckling_factor"] = factor if factor < float("inf") else None
     summary["wall_s"] = time.perf_counter() - start
     return summary
 
