@@ -169,6 +169,9 @@ class PlateLayout:
     head_weight_mass_kg: float = 0.0
     description: str = ""
     drive_model: str = "induced-strain"  # or "seed-stress" (ShellModel.dead_drive_per_volt)
+    # elastic head support: nodes with x <= support_x_m rest on springs (total N/m)
+    support_x_m: float | None = None
+    support_stiffness_n_per_m: float = 0.0
 
     def height(self, x: NDArray) -> NDArray:
         return self.height_fn(x)  # type: ignore[operator]
@@ -395,7 +398,7 @@ def _sides(case: Case, default: ActuatorSides) -> tuple[int, ...]:
 
 
 def _clamp_x(case: Case, default: float) -> float | None:
-    if case.boundary.head is HeadCondition.FREE:
+    if case.boundary.head is not HeadCondition.CLAMPED:
         return None
     return case.boundary.clamp_length_m if case.boundary.clamp_length_m is not None else default
 
@@ -413,4 +416,13 @@ def build_layout(case: Case) -> PlateLayout:
         layout = _beam_layout(case, piezo)
     else:
         return _rectangle_layout(case)
-    return replace(layout, drive_model=case.actuation.drive_model.value)
+    layout = replace(layout, drive_model=case.actuation.drive_model.value)
+    if case.boundary.head is HeadCondition.ELASTIC:
+        held = replace(case, boundary=replace(case.boundary, head=HeadCondition.CLAMPED))
+        region = _fish_layout(held, piezo) if layout.kind is GeometryKind.FISH else None
+        layout = replace(
+            layout,
+            support_x_m=region.clamp_x_m if region is not None else _clamp_x(held, 0.0),
+            support_stiffness_n_per_m=case.boundary.support_stiffness_n_per_m,
+        )
+    return layout

@@ -129,6 +129,7 @@ class ShellModel:
         self.free_dofs = ~fixed
         self.reference_points = np.column_stack([mesh.nodes, np.zeros(self.n_nodes)])
         self.area_matrix = self._scalar_mass(np.ones_like(mesh.full.weights))
+        self.support = self._support_springs()
         self.mass = self._mass_matrix()
         self.added_mass: sp.csr_matrix | None = None
         # True in partitioned *-am coupling: the added mass stands for part of the exchanged
@@ -186,10 +187,25 @@ class ShellModel:
         :class:`MixedNewtonInternal`). The force always uses the stresses of x. With the
         seed-stress drive the voltages enter as dead loads (minus the applied force).
         """
-        if self.dead_drive_per_volt is None:
-            return self._internal(x, volts, tangent, mixed)
-        r, K, lin = self._internal(x, np.zeros(2), tangent, mixed)
-        return r + np.asarray(volts) @ self.dead_drive_per_volt, K, lin
+        dead = self.dead_drive_per_volt
+        r, K, lin = self._internal(x, volts if dead is None else np.zeros(2), tangent, mixed)
+        if dead is not None:
+            r = r + np.asarray(volts) @ dead
+        if self.support is not None:
+            r = r + self.support @ x
+            K = K + self.support if K is not None else None
+        return r, K, lin
+
+    def _support_springs(self) -> sp.csr_matrix | None:
+        """Diagonal springs on u_x, u_y, u_z of the held region's nodes (elastic head
+        support), the total stiffness spread by lumped nodal area."""
+        if self.layout.support_x_m is None:
+            return None
+        held = self.mesh.nodes[:, 0] <= self.layout.support_x_m + 1e-12
+        area = np.asarray(self.area_matrix.sum(axis=1)).ravel() * held
+        k = np.zeros((self.n_nodes, NDOF))
+        k[:, :3] = (self.layout.support_stiffness_n_per_m * area / area.sum())[:, None]
+        return sp.diags(k.ravel()).tocsr()
 
     def _internal(
         self, x: NDArray, volts: NDArray, tangent: bool = True, mixed: list[NDArray] | None = None
@@ -280,7 +296,11 @@ class ShellModel:
         own = volts if dead is None else np.zeros(2)
         parts = self._parts(X[self.enodes, :3], d[self.enodes], own, with_b=False)
         energy = float(sum(p.energy() for p in parts))
-        return energy if dead is None else energy + float(np.asarray(volts) @ dead @ x)
+        if dead is not None:
+            energy += float(np.asarray(volts) @ dead @ x)
+        if self.support is not None:
+            energy += 0.5 * float(x @ (self.support @ x))
+        return energy
 
     # ------------------------------------------------------------------ mass and loads
     def _scalar_mass(self, density: NDArray, q: QuadratureData | None = None) -> sp.csr_matrix:

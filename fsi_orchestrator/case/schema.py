@@ -42,6 +42,7 @@ class CfrpProperties(StrEnum):
 class HeadCondition(StrEnum):
     CLAMPED = "clamped"
     FREE = "free"
+    ELASTIC = "elastic"  # held by springs over the clamp region (the thrust rig's stick)
 
 
 class AnalysisKind(StrEnum):
@@ -382,9 +383,11 @@ class Loads:
 class Boundary:
     head: HeadCondition = param(
         HeadCondition.CLAMPED,
-        'fish: head clamped ("fixed head") or '
+        'fish: head clamped ("fixed head"), '
         "free (free-free modes; a free body in dynamic runs, its static "
-        "start held by a reaction-free support); rectangle/beam: x = 0 edge "
+        "start held by a reaction-free support) or elastic (the nodes a clamp would hold rest "
+        "on springs of boundary.support_stiffness_n_per_m in all three directions, like the "
+        "head on the thrust rig's stick, Sec. 4.3.1); rectangle/beam: x = 0 edge "
         "clamped or free.",
     )
     clamp_length_m: float | None = param(
@@ -394,6 +397,16 @@ class Boundary:
         unit="m",
         ge=0,
         le=100,
+    )
+    support_stiffness_n_per_m: float = param(
+        1000.0,
+        'boundary.head = "elastic": total stiffness of the springs under the held region, '
+        "spread by area over its nodes, the same along x, y and z (their spread over the "
+        "region also resists rotation). The rig's stick and contact are not described in the "
+        "seed (docs/validation.md).",
+        unit="N/m",
+        gt=0,
+        le=1e9,
     )
 
 
@@ -490,7 +503,7 @@ class ShellMesh:
 class Fluid:
     model: FluidModel = param(FluidModel.NONE, "Fluid around the plate.")
     density_kg_m3: float = param(
-        1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", ge=1e-3, le=1e5
+        1820.0, "Fluorinert FC-3283 (Table 3.6).", unit="kg/m^3", ge=1e-3, le=1e7
     )
     kinematic_viscosity_m2_s: float = param(
         0.75e-6, "FC-3283 (Table 3.6).", unit="m^2/s", ge=1e-9, le=1
