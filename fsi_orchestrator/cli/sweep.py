@@ -7,17 +7,30 @@ OpenFOAM and iqn-ils-am each point starts from the quasi-Newton Jacobian the pre
 the same MPI rank learned (``coupling.jacobian_from``: fewer fluid solves, the same result to
 the coupling tolerance).
 Writes ``sweep.csv`` and ``sweep.json`` to the output folder and prints a table.
+
+Each finished point writes its row at once (``OUTPUT/sweep_rows/<waveform>_<f>Hz.json``,
+atomically, by whichever MPI rank ran it) and ``sweep.csv`` / ``sweep.json`` are merged from
+those rows after every point, so a killed sweep keeps every finished row (the tables hold every
+finished row of that case in the folder: also an earlier sweep's other frequencies, or other
+array tasks' points). ``--resume`` skips
+the points whose rows are done for the same case (``OUTPUT/sweep_case.json``) and continues a
+killed transient point from its checkpoint (its run folder is ``OUTPUT/<waveform>_<f>Hz``).
+One line per finished point goes to stderr (``--quiet``: none).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import dataclasses
+import hashlib
+import io
 import json
+import os
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -29,6 +42,22 @@ from .compose import shell_with_fast_fluid, without_cfd
 
 SAMPLES_PER_PERIOD = 64
 MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
+ROWS_FOLDER = "sweep_rows"  # one finished point's row per file
+SWEEP_CASE_FILE = "sweep_case.json"  # what was swept: --resume refuses another case
+# a launcher's task count: Open MPI's mpirun, MPICH/Intel MPI (Hydra, PMI), SLURM's srun step
+LAUNCHER_TASKS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS")
+
+OnRow = Callable[[str, dict, float], None]  # (point name, row, wall seconds)
+
+
+class SweepError(RuntimeError):
+    """A sweep that cannot go on: a launch whose MPI world does not match its tasks, a linear
+    step without a finite answer (one line, non-zero exit)."""
+
+
+def point_name(waveform: Waveform, frequency_hz: float) -> str:
+    """A point's stable name: its run folder and its row file (``sine_3Hz``)."""
+    return f"{waveform.value}_{frequency_hz:g}Hz"
 
 
 def parse_frequencies(text: str) -> list[float]:
@@ -54,7 +83,20 @@ def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
     return dataclasses.replace(case, actuation=actuation)
 
 
-def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]) -> list[dict]:
+def linear_sweep(
+    case: Case,
+    frequencies: list[float],
+    waveforms: list[Waveform],
+    done: frozenset[str] | set[str] = frozenset(),
+    on_row: OnRow | None = None,
+) -> list[dict]:
+    """The rows of the points not ``done`` (point_name), each handed to ``on_row`` as it is
+    finished. A step without a finite answer (a singular or indefinite tangent about the
+    mean-voltage equilibrium) raises SweepError naming the step; a point whose response is
+    not finite is a failed row."""
+    jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
+    if not jobs:
+        return []
     from fluid_adapter.slender_body import mean_thrust_from_shell
     from solid_adapter.build import mean_voltage_equilibrium, rayleigh_coefficients, static_loads
     from solid_adapter.harmonic import (
@@ -68,21 +110,28 @@ def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]
     model, _ = shell_with_fast_fluid(case)
     drive0 = DriveSignal.from_case(case)
     x_static = mean_voltage_equilibrium(case, model, drive0, static_loads(case, model))
-    sweep = ModalSweep.build(
-        model,
-        harmonic_load(model, drive0, x_static),
-        MODES,
-        rayleigh_coefficients(case, model),
-        stiffness=mean_voltage_tangent(model, x_static, drive0),
-    )
+    if not np.all(np.isfinite(x_static)):
+        raise SweepError(
+            "linear sweep, static step: the equilibrium under the mean voltages is not finite"
+        )
+    with np.errstate(divide="ignore", invalid="ignore"):  # checked below, in one line
+        sweep = ModalSweep.build(
+            model,
+            harmonic_load(model, drive0, x_static),
+            MODES,
+            rayleigh_coefficients(case, model),
+            stiffness=mean_voltage_tangent(model, x_static, drive0),
+        )
+    check_modal_sweep(sweep)
     midline = _midline(model)
     xs = model.mesh.nodes[midline, 0]
     half_height = model.layout.height(xs) / 2
     tip = model.mesh.nearest_node(*model.layout.tip_point)
     rows = []
-    for waveform in waveforms:
-        for f in frequencies:
-            drive = DriveSignal.from_case(with_drive(case, f, waveform))
+    for waveform, f in jobs:
+        start = time.perf_counter()
+        drive = DriveSignal.from_case(with_drive(case, f, waveform))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             response = sweep_response(sweep, drive, x_static)
             times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
             h = response.dof_history(midline * 5 + 2, times)
@@ -96,67 +145,126 @@ def linear_sweep(case: Case, frequencies: list[float], waveforms: list[Waveform]
                 period_s=1.0 / f,
                 added_mass_coefficient=case.fluid.added_mass_coefficient,
             )
-            rows.append(
-                {
-                    "waveform": waveform.value,
-                    "frequency_hz": float(f),
-                    "tip_amplitude_m": float(np.ptp(tip_z) / 2),
-                    "slender_body_mean_thrust_n": float(thrust),
-                }
-            )
+        row = {
+            "waveform": waveform.value,
+            "frequency_hz": float(f),
+            "tip_amplitude_m": float(np.ptp(tip_z) / 2),
+            "slender_body_mean_thrust_n": float(thrust),
+            "status": "ok",
+        }
+        row["status"] = not_finite_status(row, ("tip_amplitude_m", "slender_body_mean_thrust_n"))
+        rows.append(row)
+        if on_row is not None:
+            on_row(point_name(waveform, f), row, time.perf_counter() - start)
     return rows
 
 
+def check_modal_sweep(sweep) -> None:
+    """The modal superposition needs every wet mode at a positive, finite frequency and a
+    finite static correction: a singular or indefinite tangent (a mechanism, or a plate
+    buckled by the mean voltages) has none."""
+    omegas = np.asarray(sweep.omegas)
+    bad = np.flatnonzero(~(np.isfinite(omegas) & (omegas > 0)))
+    if bad.size:
+        j = int(bad[0])
+        raise SweepError(
+            f"linear sweep, modal step: the tangent about the mean-voltage equilibrium is "
+            f"singular or indefinite (wet mode {j + 1} at {omegas[j] / (2 * np.pi):.3g} Hz: a "
+            "mechanism, or a plate buckled by the mean voltages), so the linear response has "
+            "no finite answer; check the case with fsi-modal, or use --method transient"
+        )
+    if not (np.all(np.isfinite(sweep.static)) and np.all(np.isfinite(sweep.zetas))):
+        raise SweepError(
+            "linear sweep, static-correction step: K^-1 F about the mean-voltage equilibrium "
+            "is not finite (a singular tangent); check the case with fsi-modal"
+        )
+
+
+def not_finite_status(row: dict, keys: Sequence[str], step: str = "linear response") -> str:
+    """``row``'s status, or "failed: ..." naming the keys whose values are NaN or infinite:
+    a NaN never passes as a result."""
+    bad = [k for k in keys if k in row and not np.isfinite(row[k])]
+    if not bad or row.get("status", "ok").startswith("failed"):
+        return row.get("status", "ok")
+    return f"failed: {', '.join(bad)} not finite ({step})"
+
+
 def transient_sweep(
-    case: Case, frequencies: list[float], waveforms: list[Waveform], output: Path
+    case: Case,
+    frequencies: list[float],
+    waveforms: list[Waveform],
+    output: Path,
+    *,
+    comm=None,
+    done: frozenset[str] | set[str] = frozenset(),
+    resume: bool = False,
+    on_row: OnRow | None = None,
 ) -> list[dict]:
-    """One nonlinear run per (waveform, frequency). Under ``mpiexec`` (mpi4py) the runs are
-    dealt round-robin to the ranks and gathered on rank 0; other ranks return []."""
+    """One nonlinear run per (waveform, frequency) not ``done`` (point_name), in the stable
+    folder ``output/<point name>``; each row is handed to ``on_row`` as it is finished. With
+    ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
+    the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
+    holds a checkpoint continues from it (fsi-run --resume)."""
     from solid_adapter.solvers import SolverError
 
+    from ..loop import ResumeError
+    from ..results import CHECKPOINT_FILE
     from .run import run_dynamic
 
-    jobs = [(w, f) for w in waveforms for f in frequencies]
-    comm = mpi_world()
+    jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     mine = []
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
     for index in range(rank, len(jobs), size):
         waveform, f = jobs[index]
-        folder = output / f"{waveform.value}_{f:g}Hz"
+        folder = output / point_name(waveform, f)
         point = with_drive(case, f, waveform)
         if learned is not None:
             point = chained(point, learned)
+        start = time.perf_counter()
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
-            summary = run_dynamic(point, folder, resume=False, show_progress=False)
+            continued = resume and (folder / CHECKPOINT_FILE).is_file()
+            try:
+                summary = run_dynamic(point, folder, resume=continued, show_progress=False)
+            except ResumeError as err:
+                if not continued:
+                    raise
+                print(f"note: {folder}: {err}; running the point afresh", file=sys.stderr)
+                summary = run_dynamic(point, folder, resume=False, show_progress=False)
             status = "ok" if "start_from_rest" not in summary else "ok (started from rest)"
             learned = folder
         except (SolverError, RuntimeError) as err:
             summary, status = {}, f"failed: {err}".splitlines()[0]
-            print(f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr)
+            if on_row is None:
+                print(
+                    f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr
+                )
         nan = float("nan")
-        mine.append(
-            (
-                index,
-                {
-                    "waveform": waveform.value,
-                    "frequency_hz": float(f),
-                    "tip_amplitude_m": summary.get("tip_amplitude_m", nan),
-                    "mean_thrust_n": summary.get("mean_thrust_n", nan),
-                    "thrust_source": summary.get("thrust_source", ""),
-                    "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
-                    "mean_fluid_solves_per_window": summary.get(
-                        "mean_fluid_solves_per_window", 1.0 if summary else nan
-                    ),
-                    # a start-up not yet settled (fsi-run's note): the point's figures are
-                    # its last period's, not the periodic state's
-                    "tip_amplitude_change_last_period": summary.get(
-                        "tip_amplitude_change_last_period", nan
-                    ),
-                    "status": status,
-                },
-            )
+        row = {
+            "waveform": waveform.value,
+            "frequency_hz": float(f),
+            "tip_amplitude_m": summary.get("tip_amplitude_m", nan),
+            "mean_thrust_n": summary.get("mean_thrust_n", nan),
+            "thrust_source": summary.get("thrust_source", ""),
+            "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
+            "mean_fluid_solves_per_window": summary.get(
+                "mean_fluid_solves_per_window", 1.0 if summary else nan
+            ),
+            # a start-up not yet settled (fsi-run's note): the point's figures are
+            # its last period's, not the periodic state's
+            "tip_amplitude_change_last_period": summary.get(
+                "tip_amplitude_change_last_period", nan
+            ),
+            "status": status,
+        }
+        # a figure the run gave as NaN fails the point (one it did not give stays NaN: a beam
+        # has no thrust)
+        row["status"] = not_finite_status(
+            {**summary, "status": status}, ("tip_amplitude_m", "mean_thrust_n"), "the run's result"
         )
+        if on_row is not None:
+            on_row(point_name(waveform, f), row, time.perf_counter() - start)
+        mine.append((index, row))
     gathered = comm.gather(mine, root=0) if comm is not None else [mine]
     if rank != 0:
         return []
@@ -184,19 +292,55 @@ def chained(case: Case, previous: Path) -> Case:
     return dataclasses.replace(case, coupling=coupling)
 
 
-def mpi_world():
-    """MPI.COMM_WORLD when launched by mpiexec/srun with more than one rank, else None."""
-    import os
+def launcher_tasks() -> tuple[str, int] | None:
+    """(variable, tasks) when a launcher started this process as one of several tasks:
+    mpirun/mpiexec (Open MPI, MPICH/Intel MPI) or an srun step; None for one process (also a
+    SLURM batch script itself, which has SLURM_NTASKS but no step)."""
+    for var in LAUNCHER_TASKS:
+        try:
+            tasks = int(os.environ.get(var, ""))
+        except ValueError:
+            continue
+        if tasks > 1:
+            return var, tasks
+    return None
 
-    if not any(
-        k in os.environ for k in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "SLURM_NTASKS")
-    ):
-        return None
+
+def mpi_world():
+    """MPI.COMM_WORLD when launched by mpiexec/srun with more than one task, else None.
+
+    A launch whose tasks mpi4py does not see as one MPI world (mpi4py missing, or built
+    against another MPI than the launcher's: each task sees a world of 1) would run every
+    point in every task, into the same folders: SweepError, in one line."""
+    launched = launcher_tasks()
+    if launched is None:
+        if "PMIX_RANK" not in os.environ:  # a PMIx launch that names no size
+            return None
+        try:
+            from mpi4py import MPI
+        except ImportError:
+            return None
+        return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
+    var, tasks = launched
+    fix = (
+        "install mpi4py built against the launcher's MPI (with its mpicc on PATH: pip install "
+        "--no-binary=mpi4py --force-reinstall mpi4py), or run fsi-sweep as one task"
+    )
     try:
         from mpi4py import MPI
     except ImportError:
-        return None
-    return MPI.COMM_WORLD if MPI.COMM_WORLD.Get_size() > 1 else None
+        raise SweepError(
+            f"launched as {tasks} tasks ({var}={tasks}) but mpi4py is not installed: every "
+            f"task would run every point into the same folders; {fix}"
+        ) from None
+    size = MPI.COMM_WORLD.Get_size()
+    if size != tasks:
+        raise SweepError(
+            f"launched as {tasks} tasks ({var}={tasks}) but mpi4py sees an MPI world of {size}"
+            f" (not the launcher's MPI): tasks would run the same points into the same "
+            f"folders; {fix}"
+        )
+    return MPI.COMM_WORLD
 
 
 def _midline(model) -> np.ndarray:
@@ -206,12 +350,167 @@ def _midline(model) -> np.ndarray:
 
 
 def write_tables(rows: list[dict], output: Path) -> None:
+    """``sweep.csv`` and ``sweep.json``, each replaced atomically (a reader, or a kill, never
+    meets half a table)."""
     output.mkdir(parents=True, exist_ok=True)
-    with open(output / "sweep.csv", "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    (output / "sweep.json").write_text(json.dumps(to_jsonable(rows), indent=1))
+    fields = list(dict.fromkeys(k for r in rows for k in r))
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=fields, restval="")
+    writer.writeheader()
+    writer.writerows(rows)
+    atomic_write(output / "sweep.csv", text.getvalue())
+    atomic_write(output / "sweep.json", json.dumps(to_jsonable(rows), indent=1))
+
+
+def atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", newline="") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+@contextlib.contextmanager
+def folder_lock(folder: Path) -> Iterator[None]:
+    """An exclusive lock among the MPI ranks (and array tasks) that merge into one folder;
+    where the file system has no locks the merge goes on unlocked (the row files stay the
+    record: the last merge, at the end, is complete)."""
+    try:
+        import fcntl
+
+        fh = open(folder / ".sweep.lock", "a")
+    except (ImportError, OSError):
+        yield
+        return
+    with fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX)
+        except OSError:
+            pass
+        yield
+
+
+def sweep_identity(case: Case, method: str) -> dict:
+    """What a sweep's rows depend on besides their point: the case (without its drive
+    frequency and waveform, nor its folder), the method and this version."""
+    from .. import __version__
+
+    fields = to_jsonable(dataclasses.asdict(case))
+    fields.pop("directory", None)
+    for key in ("frequency_hz", "waveform"):
+        fields["actuation"].pop(key, None)
+    identity = {"version": __version__, "method": method, "case": fields}
+    return json.loads(json.dumps(identity, default=str))
+
+
+def identity_changes(old: dict, new: dict, limit: int = 3) -> str:
+    """``section.key: old -> new`` for the first few differences."""
+
+    def flat(value, prefix=""):
+        if isinstance(value, dict):
+            return {
+                k: v for key, sub in value.items() for k, v in flat(sub, f"{prefix}{key}.").items()
+            }
+        return {prefix.rstrip("."): value}
+
+    a, b = flat(old), flat(new)
+    keys = [
+        k.removeprefix("case.")
+        for k in sorted(set(a) | set(b), key=lambda k: (k != "version", k))
+        if a.get(k) != b.get(k)
+    ]
+    shown = []
+    for key in keys[:limit]:
+        full = key if key in ("version", "method") else f"case.{key}"
+        shown.append(f"{key}: {a.get(full, '(none)')!r} -> {b.get(full, '(none)')!r}")
+    more = f" and {len(keys) - limit} more" if len(keys) > limit else ""
+    return ", ".join(shown) + more
+
+
+class SweepTable:
+    """A sweep's rows on disk: one JSON file per finished point in ``OUTPUT/sweep_rows``
+    (written atomically by the rank that ran it), merged under a lock into ``sweep.csv`` and
+    ``sweep.json`` after every point. Rows count only for the case in ``sweep_case.json``."""
+
+    def __init__(self, output: Path, identity: dict, waveforms: Sequence[Waveform]) -> None:
+        self.output, self.identity = output, identity
+        self.key = hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()[:16]
+        self.rows_dir = output / ROWS_FOLDER
+        order = [w.value for w in waveforms] + [w.value for w in Waveform]
+        self._sort = lambda row: (order.index(row["waveform"]), row["frequency_hz"])
+
+    def prepare(self, names: Sequence[str], resume: bool) -> set[str]:
+        """On one rank, before any point runs: the names of the points already done
+        (``resume``), else none (and the rows a previous sweep left for these points go)."""
+        try:
+            self.rows_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise CaseError(
+                f"--output {self.output}: cannot write there ({err.strerror})"
+            ) from None
+        case_file = self.output / SWEEP_CASE_FILE
+        done: set[str] = set()
+        if resume:
+            if case_file.is_file():
+                try:
+                    old = json.loads(case_file.read_text())
+                except (OSError, ValueError):
+                    old = None
+                if old != self.identity:
+                    what = (
+                        identity_changes(old, self.identity)
+                        if isinstance(old, dict)
+                        else (f"{case_file} is unreadable")
+                    )
+                    raise CaseError(
+                        f"--resume: {self.output} holds a sweep of another case ({what}); "
+                        "sweep into another --output, or drop --resume to start afresh"
+                    )
+            finished = self.rows()
+            done = {n for n in names if finished.get(n, {}).get("status", "").startswith("ok")}
+        else:
+            for name in names:
+                (self.rows_dir / f"{name}.json").unlink(missing_ok=True)
+        atomic_write(case_file, json.dumps(self.identity, indent=1))
+        return done
+
+    def rows(self) -> dict[str, dict]:
+        """This case's finished rows on disk, by point name."""
+        found = {}
+        for path in sorted(self.rows_dir.glob("*.json")):
+            try:
+                record = json.loads(path.read_text())
+            except (OSError, ValueError):
+                continue
+            if isinstance(record, dict) and record.get("sweep") == self.key:
+                found[path.stem] = record["row"]
+        return found
+
+    def put(self, name: str, row: dict) -> dict[str, dict]:
+        """Record a finished point and merge the tables; every finished row, by name."""
+        record = {"sweep": self.key, "row": to_jsonable(row)}
+        atomic_write(self.rows_dir / f"{name}.json", json.dumps(record))
+        return self.merge()
+
+    def merge(self) -> dict[str, dict]:
+        with folder_lock(self.output):
+            found = self.rows()
+            if found:
+                write_tables(sorted(found.values(), key=self._sort), self.output)
+        return found
+
+
+def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
+    """One finished point, for logs: ``sweep: point 3/26 sine 5 Hz: ...``."""
+    thrust = row.get("mean_thrust_n", row.get("slender_body_mean_thrust_n", float("nan")))
+    status = row.get("status", "ok")
+    tail = "" if status == "ok" else f"; {status}"
+    return (
+        f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: tip "
+        f"amplitude {1e3 * row['tip_amplitude_m']:.3g} mm, thrust {1e3 * thrust:.3g} mN, "
+        f"{wall_s:.1f} s{tail}"
+    )
 
 
 def print_table(rows: list[dict]) -> None:
@@ -225,6 +524,8 @@ def print_table(rows: list[dict]) -> None:
 
 
 def _body(args: argparse.Namespace) -> int:
+    comm = mpi_world()  # first: a mismatched launch stops before any work
+    rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     case = load(args)
     frequencies = parse_frequencies(args.frequencies)
     names = "sine,square" if args.waveforms.strip() == "both" else args.waveforms
@@ -236,7 +537,38 @@ def _body(args: argparse.Namespace) -> int:
         ) from None
     output = Path(args.output) if args.output else case.directory / "output" / "sweep"
     start = time.perf_counter()
+    points = [point_name(w, f) for w in waveforms for f in frequencies]
+    table = SweepTable(output, sweep_identity(case, args.method), waveforms)
+    done = table.prepare(points, args.resume) if rank == 0 else None
+    if comm is not None:  # every rank deals the same points
+        done = comm.bcast(done, root=0)
+
+    def say(line: str, always: bool = False) -> None:
+        if always or not args.quiet:
+            print(line, file=sys.stderr, flush=True)
+
+    if rank == 0:
+        mpi = f", {size} MPI ranks" if size > 1 else ""
+        resumed = f", {len(done)} done before (--resume)" if args.resume else ""
+        say(f"sweep: {len(points)} points ({args.method}{mpi}) into {output}{resumed}")
+
+    def on_row(name: str, row: dict, wall_s: float) -> None:
+        finished = len(set(table.put(name, row)) & set(points))
+        failed = row.get("status", "ok").startswith("failed")
+        line = progress_line(row, wall_s, finished, len(points))
+        say(
+            line
+            + (
+                f" (output kept in {output / name})"
+                if failed and args.method == "transient"
+                else ""
+            ),
+            always=failed,
+        )
+
     if args.method == "linear":
+        if rank != 0:  # seconds on one rank: the others have nothing to do
+            return EXIT_OK
         case = without_cfd(case)
         if case.fluid.model is not FluidModel.NONE and case.fluid.damping_ratio == 0:
             print(
@@ -245,18 +577,30 @@ def _body(args: argparse.Namespace) -> int:
                 "fluid.damping_ratio=0.05",
                 file=sys.stderr,
             )
-        rows = linear_sweep(case, frequencies, waveforms)
+        linear_sweep(case, frequencies, waveforms, done, on_row)
     else:
-        rows = transient_sweep(case, frequencies, waveforms, output)
-        if not rows:  # an MPI rank other than 0: rank 0 writes and prints
+        transient_sweep(
+            case,
+            frequencies,
+            waveforms,
+            output,
+            comm=comm,
+            done=done,
+            resume=args.resume,
+            on_row=on_row,
+        )
+        if rank != 0:  # rank 0 merges and prints, after the gather
             return EXIT_OK
-    write_tables(rows, output)
+    finished = table.merge()
+    rows = [finished[n] for n in points if n in finished]
     if args.json:
         emit({"rows": rows, "wall_s": time.perf_counter() - start, "output": str(output)}, True)
     else:
         print_table(rows)
         print(f"wrote {output / 'sweep.csv'} ({time.perf_counter() - start:.1f} s)")
-    failed = any(r.get("status", "ok").startswith("failed") for r in rows)
+    failed = [r for r in rows if r.get("status", "ok").startswith("failed")]
+    if failed:
+        say(f"sweep: {len(failed)} of {len(rows)} points failed (rerun them with --resume)", True)
     return EXIT_FAILED if failed else EXIT_OK
 
 
@@ -273,6 +617,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "frequency with the case's own fluid (MPI: one frequency per rank)",
     )
     parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="skip the points whose rows are done in --output (same case) and run the rest; a "
+        "killed transient point continues from its checkpoint",
+    )
+    parser.add_argument("--quiet", action="store_true", help="no line per finished point")
     return run_main(_body, parser, argv)
 
 

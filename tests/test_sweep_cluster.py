@@ -1,0 +1,512 @@
+"""fsi-sweep as a cluster job (issue 27, part 2): rows written as each point finishes, --resume,
+a launch whose MPI world does not match its tasks, a NaN never leaving with exit 0, one
+progress line per point in logs, and scripts/slurm_sweep.sh under a real SLURM."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import types
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fsi_orchestrator.cli import run as run_cli
+from fsi_orchestrator.cli import sweep as sweep_cli
+from fsi_orchestrator.cli.common import EXIT_FAILED, EXIT_INTERRUPTED
+
+ROOT = Path(__file__).resolve().parents[1]
+BEAM = ROOT / "cases/beam_in_liquid"
+# the beam in liquid, its mean voltage held by no bond (the seed's strip buckles under the
+# full mean: solid_adapter/buckling.py), and transient runs of two windows
+BEAM_SET = ["--set", "actuation.mean_strain_transfer=0"]
+SHORT_RUN = ["--set", "time.periods=0.25", "--set", "time.steps_per_period=8"]
+FSI_SWEEP = str(ROOT / ".venv/bin/fsi-sweep")
+
+
+def table(folder: Path) -> list[dict]:
+    with open(folder / "sweep.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def points(rows: list[dict]) -> list[tuple[str, float]]:
+    return [(r["waveform"], float(r["frequency_hz"])) for r in rows]
+
+
+def linear_frequencies_run(monkeypatch, interrupt_at: int | None = None) -> list[float]:
+    """Spy on the linear sweep's per-point step (the slender-body thrust): the frequencies it
+    ran, in order; ``interrupt_at``: a Ctrl-C (as a kill) at that call."""
+    import fluid_adapter.slender_body as slender_body
+
+    real = slender_body.mean_thrust_from_shell
+    ran: list[float] = []
+
+    def spy(*args, **kwargs):
+        ran.append(round(1.0 / kwargs["period_s"], 9))
+        if interrupt_at is not None and len(ran) == interrupt_at:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(slender_body, "mean_thrust_from_shell", spy)
+    return ran
+
+
+def test_a_killed_linear_sweep_keeps_its_rows_and_resume_runs_only_the_missing_points(
+    tmp_path, monkeypatch, capsys
+):
+    """Killed at its 3rd point, the sweep's table holds the 2 finished rows; --resume runs
+    the 3rd only and the table is whole; a resume with another waveform runs only its points.
+    Each finished point gives one line on stderr (not a terminal here)."""
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,8,20", "--waveforms", "sine"]
+    args += ["--output", str(out)]
+    ran = linear_frequencies_run(monkeypatch, interrupt_at=3)
+    assert sweep_cli.main(args) == EXIT_INTERRUPTED
+    assert ran == [2.0, 8.0, 20.0]
+    assert points(table(out)) == [("sine", 2.0), ("sine", 8.0)]
+    killed = table(out)
+    err = capsys.readouterr().err
+    assert not sys.stderr.isatty()
+    lines = [line for line in err.splitlines() if line.startswith("sweep: point")]
+    assert [line.split(":")[1] for line in lines] == [
+        " point 1/3 sine 2 Hz",
+        " point 2/3 sine 8 Hz",
+    ]
+    assert "tip amplitude" in lines[0] and "thrust" in lines[0] and lines[0].endswith(" s")
+
+    ran = linear_frequencies_run(monkeypatch)
+    assert sweep_cli.main([*args, "--resume"]) == 0
+    assert ran == [20.0]
+    rows = table(out)
+    assert points(rows) == [("sine", 2.0), ("sine", 8.0), ("sine", 20.0)]
+    assert rows[:2] == killed
+    err = capsys.readouterr().err
+    assert "3 points (linear) into" in err and "2 done before (--resume)" in err
+    assert "sweep: point 3/3 sine 20 Hz" in err
+
+    ran = linear_frequencies_run(monkeypatch)
+    both = [a if a != "sine" else "both" for a in args]
+    assert sweep_cli.main([*both, "--resume", "--quiet", "--json"]) == 0
+    assert ran == [2.0, 8.0, 20.0]  # the square points only
+    out_rows = json.loads(capsys.readouterr().out)["rows"]
+    assert points(out_rows) == [(w, f) for w in ("sine", "square") for f in (2.0, 8.0, 20.0)]
+    assert len(table(out)) == 6
+    assert "sweep:" not in capsys.readouterr().err  # --quiet
+
+
+def test_a_resume_of_another_case_is_refused_naming_what_changed(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "5", "--waveforms", "sine"]
+    args += ["--output", str(out), "--quiet"]
+    assert sweep_cli.main(args) == 0
+    capsys.readouterr()
+    assert sweep_cli.main([*args, "--resume", "--set", "fluid.damping_ratio=0.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith(f"error: --resume: {out} holds a sweep of another case")
+    assert "fluid.damping_ratio: 0.05 -> 0.1" in err
+
+
+def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None = None):
+    """run_dynamic stubbed: records (point folder name, resume), writes a checkpoint into the
+    point's folder first (as a real run does every few windows), then raises ``fail[f]``."""
+
+    def stub(case, output, resume, show_progress):
+        f = case.actuation.frequency_hz
+        calls.append((output.name, resume))
+        output.mkdir(parents=True, exist_ok=True)
+        (output / "checkpoint.h5").write_bytes(b"")
+        if fail and f in fail:
+            raise fail[f]
+        return {"tip_amplitude_m": 1e-3 * f, "mean_thrust_n": 1e-4 * f}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+
+
+def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
+    tmp_path, monkeypatch, capsys
+):
+    """A transient sweep killed at its 3rd point (2 Hz done, 4 Hz failed, 6 Hz killed with a
+    checkpoint): --resume runs 4 Hz afresh, continues 6 Hz from its checkpoint (fsi-run's
+    --resume) in its stable folder, runs 8 Hz, and leaves 2 Hz alone."""
+    out = tmp_path / "sweep"
+    args = ["--frequencies", "2,4,6,8", "--waveforms", "sine", "--method", "transient"]
+    args = [str(BEAM), *BEAM_SET, *args, "--output", str(out)]
+    calls: list = []
+    crash = RuntimeError("pimpleFoam diverged\nmore")
+    stub_runs(monkeypatch, calls, {4.0: crash, 6.0: KeyboardInterrupt()})
+    assert sweep_cli.main(args) == EXIT_INTERRUPTED
+    assert calls == [("sine_2Hz", False), ("sine_4Hz", False), ("sine_6Hz", False)]
+    rows = table(out)
+    assert [(r["frequency_hz"], r["status"]) for r in rows] == [
+        ("2.0", "ok"),
+        ("4.0", "failed: pimpleFoam diverged"),
+    ]
+    err = capsys.readouterr().err
+    assert "sweep: point 2/4 sine 4 Hz" in err and "failed: pimpleFoam diverged" in err
+    assert f"(output kept in {out / 'sine_4Hz'})" in err
+
+    (out / "sine_4Hz" / "checkpoint.h5").unlink()  # it failed before its first checkpoint
+    calls.clear()
+    stub_runs(monkeypatch, calls)
+    assert sweep_cli.main([*args, "--resume"]) == 0
+    assert calls == [("sine_4Hz", False), ("sine_6Hz", True), ("sine_8Hz", False)]
+    rows = table(out)
+    assert points(rows) == [("sine", f) for f in (2.0, 4.0, 6.0, 8.0)]
+    assert all(r["status"] == "ok" for r in rows)
+    assert [float(r["tip_amplitude_m"]) for r in rows] == pytest.approx([2e-3, 4e-3, 6e-3, 8e-3])
+
+    calls.clear()  # all done: nothing runs
+    assert sweep_cli.main([*args, "--resume"]) == 0
+    assert calls == []
+    calls.clear()  # without --resume: everything runs again, fresh
+    assert sweep_cli.main(args) == 0
+    assert calls == [(f"sine_{f}Hz", False) for f in (2, 4, 6, 8)]
+
+
+def test_a_transient_point_with_a_nan_result_fails_the_sweep(tmp_path, monkeypatch, capsys):
+    """A run that returns NaN (no exception) is a failed row: exit 1, the other rows kept. A
+    figure the run does not give (a beam's thrust) stays NaN without failing."""
+
+    def stub(case, output, resume, show_progress):
+        f = case.actuation.frequency_hz
+        return {"tip_amplitude_m": float("nan") if f == 4.0 else 1e-3}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine"]
+    args += ["--method", "transient", "--output", str(out), "--quiet"]
+    assert sweep_cli.main(args) == EXIT_FAILED
+    rows = table(out)
+    assert [r["status"] for r in rows] == [
+        "ok",
+        "failed: tip_amplitude_m not finite (the run's result)",
+        "ok",
+    ]
+    err = capsys.readouterr().err
+    assert "sweep: point 2/3 sine 4 Hz" in err  # shown although --quiet
+    assert "1 of 3 points failed" in err
+
+
+def test_a_singular_tangent_stops_the_linear_sweep_in_one_line(tmp_path, monkeypatch, capsys):
+    """A wet mode at 0 Hz (what a mechanism, or a plate buckled by the mean voltages, gives:
+    the integrative preset divided by it and printed NaN with exit 0): one line naming the
+    step, exit 1, no NumPy warnings."""
+    from solid_adapter.harmonic import ModalSweep
+
+    real = ModalSweep.build.__func__
+
+    def singular(cls, *args, **kwargs):
+        sweep = real(cls, *args, **kwargs)
+        omegas = sweep.omegas.copy()
+        omegas[0] = 0.0
+        return dataclasses.replace(
+            sweep, omegas=omegas, zetas=np.where(omegas > 0, sweep.zetas, np.nan)
+        )
+
+    monkeypatch.setattr(ModalSweep, "build", classmethod(singular))
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,8", "--waveforms", "sine", "--quiet"]
+    assert sweep_cli.main([*args, "--output", str(tmp_path / "sweep")]) == EXIT_FAILED
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    err = captured.err.strip()
+    assert "\n" not in err and "Warning" not in err
+    assert err.startswith("error: linear sweep, modal step: the tangent about the mean-voltage")
+    assert "singular or indefinite (wet mode 1 at 0 Hz" in err
+
+
+def test_a_nan_point_of_the_linear_sweep_fails_it_and_keeps_the_other_rows(
+    tmp_path, monkeypatch, capsys
+):
+    import fluid_adapter.slender_body as slender_body
+
+    real = slender_body.mean_thrust_from_shell
+
+    def nan_at_8hz(*args, **kwargs):
+        value = real(*args, **kwargs)
+        return float("nan") if abs(kwargs["period_s"] - 1 / 8) < 1e-12 else value
+
+    monkeypatch.setattr(slender_body, "mean_thrust_from_shell", nan_at_8hz)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,8,20", "--waveforms", "sine"]
+    assert sweep_cli.main([*args, "--output", str(out), "--json"]) == EXIT_FAILED
+    rows = table(out)
+    assert [r["status"] for r in rows] == [
+        "ok",
+        "failed: slender_body_mean_thrust_n not finite (linear response)",
+        "ok",
+    ]
+    assert float(rows[2]["tip_amplitude_m"]) > 0
+    assert len(json.loads(capsys.readouterr().out)["rows"]) == 3
+
+
+def fake_mpi4py(size: int) -> types.ModuleType:
+    world = types.SimpleNamespace(Get_size=lambda: size, Get_rank=lambda: 0)
+    module = types.ModuleType("mpi4py")
+    module.MPI = types.SimpleNamespace(COMM_WORLD=world)
+    return module
+
+
+LAUNCHER_VARS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS", "PMIX_RANK")
+
+
+@pytest.mark.parametrize(
+    "env, mpi4py, expected",
+    [
+        (
+            {"OMPI_COMM_WORLD_SIZE": "4"},
+            1,
+            "launched as 4 tasks (OMPI_COMM_WORLD_SIZE=4) but mpi4py sees an MPI world of 1",
+        ),
+        (
+            {"PMI_SIZE": "3"},
+            1,
+            "launched as 3 tasks (PMI_SIZE=3) but mpi4py sees an MPI world of 1",
+        ),
+        (
+            {"SLURM_STEP_NUM_TASKS": "2", "SLURM_NTASKS": "2"},
+            None,
+            "launched as 2 tasks (SLURM_STEP_NUM_TASKS=2) but mpi4py is not installed",
+        ),
+        (
+            {"SLURM_STEP_NUM_TASKS": "4"},
+            2,
+            "launched as 4 tasks (SLURM_STEP_NUM_TASKS=4) but mpi4py sees an MPI world of 2",
+        ),
+    ],
+)
+def test_a_launch_that_mpi4py_does_not_see_is_refused_in_one_line(
+    tmp_path, monkeypatch, capsys, env, mpi4py, expected
+):
+    for var in LAUNCHER_VARS:
+        monkeypatch.delenv(var, raising=False)
+    for var, value in env.items():
+        monkeypatch.setenv(var, value)
+    monkeypatch.setitem(sys.modules, "mpi4py", None if mpi4py is None else fake_mpi4py(mpi4py))
+    args = [str(BEAM), "--frequencies", "2", "--output", str(tmp_path / "sweep")]
+    assert sweep_cli.main(args) == EXIT_FAILED
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and err.startswith(f"error: {expected}")
+    assert "install mpi4py built against the launcher's MPI" in err
+    assert "run fsi-sweep as one task" in err
+    assert not (tmp_path / "sweep").exists()  # before any work
+
+
+@pytest.mark.parametrize(
+    "env, mpi4py, size",
+    [
+        ({}, 1, None),  # no launcher: mpi4py is not even asked
+        ({"SLURM_NTASKS": "4"}, 1, None),  # a batch script itself: one process, no step
+        ({"OMPI_COMM_WORLD_SIZE": "1"}, 1, None),
+        ({"SLURM_STEP_NUM_TASKS": "2"}, 2, 2),
+    ],
+)
+def test_a_matching_launch_gives_its_world(monkeypatch, env, mpi4py, size):
+    for var in LAUNCHER_VARS:
+        monkeypatch.delenv(var, raising=False)
+    for var, value in env.items():
+        monkeypatch.setenv(var, value)
+    monkeypatch.setitem(sys.modules, "mpi4py", fake_mpi4py(mpi4py))
+    world = sweep_cli.mpi_world()
+    assert (world.Get_size() if world is not None else None) == size
+
+
+def test_a_real_mismatched_launch_exits_non_zero(tmp_path):
+    """The real mpi4py (a one-process world here) under a launcher's variable: the command
+    stops at once in one line, exit 1."""
+    env = {k: v for k, v in os.environ.items() if k not in LAUNCHER_VARS}
+    proc = subprocess.run(
+        [FSI_SWEEP, str(BEAM), "--frequencies", "2", "--output", str(tmp_path / "s")],
+        env={**env, "PMI_SIZE": "2"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 1
+    assert proc.stderr.startswith("error: launched as 2 tasks (PMI_SIZE=2) but mpi4py sees")
+    assert proc.stderr.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_a_sweep_killed_by_sigkill_keeps_its_rows_and_resumes(tmp_path):
+    """A real transient sweep, killed (SIGKILL: no clean-up at all) after its first point:
+    its table holds that row; --resume runs the other points only (stderr, not a terminal,
+    names each point that ran)."""
+    out = tmp_path / "sweep"
+    cmd = [FSI_SWEEP, str(BEAM), *BEAM_SET, *SHORT_RUN, "--method", "transient"]
+    cmd += ["--frequencies", "2,8,20", "--waveforms", "sine", "--output", str(out)]
+    log = open(tmp_path / "killed.log", "w")
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
+    deadline = time.monotonic() + 600
+    while not list((out / sweep_cli.ROWS_FOLDER).glob("*.json")):
+        assert proc.poll() is None, (tmp_path / "killed.log").read_text()
+        assert time.monotonic() < deadline
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    first = table(out)
+    assert points(first) == [("sine", 2.0)]
+    resumed = subprocess.run([*cmd, "--resume"], capture_output=True, text=True, timeout=900)
+    assert resumed.returncode == 0, resumed.stderr
+    ran = [line.split(":")[1] for line in resumed.stderr.splitlines() if "sweep: point" in line]
+    assert ran == [" point 2/3 sine 8 Hz", " point 3/3 sine 20 Hz"]
+    rows = table(out)
+    assert points(rows) == [("sine", 2.0), ("sine", 8.0), ("sine", 20.0)]
+    assert rows[0] == first[0]
+
+
+# --- a real one-node SLURM (docs: /work/shared/notes/slurm-local.md) ---------------------
+
+
+@pytest.fixture(scope="module")
+def slurm(tmp_path_factory):
+    """slurmctld, slurmd (and munged if none runs) started by hand on this machine; the
+    environment to submit with. Skips, with the reason, where that cannot be done."""
+    missing = [
+        b
+        for b in ("slurmctld", "slurmd", "munged", "sbatch", "sinfo", "munge")
+        if shutil.which(b) is None
+    ]
+    if missing:
+        pytest.skip(
+            f"no SLURM here ({', '.join(missing)} missing: apt-get install -y "
+            "slurm-wlm munge libpmix-dev)"
+        )
+    if os.geteuid() != 0:
+        pytest.skip("starting slurmd by hand needs root")
+    if not Path("/etc/munge/munge.key").is_file():
+        pytest.skip("no /etc/munge/munge.key")
+    base = tmp_path_factory.mktemp("slurm")
+    for sub in ("state", "spool", "log"):
+        (base / sub).mkdir()
+    host = socket.gethostname().split(".")[0]
+    node = subprocess.run(["slurmd", "-C"], capture_output=True, text=True).stdout.splitlines()
+    if not node or not node[0].startswith("NodeName="):
+        pytest.skip("slurmd -C did not describe this node")
+    conf = base / "slurm.conf"
+    conf.write_text(
+        "\n".join(
+            [
+                "ClusterName=t",
+                f"SlurmctldHost={host}",
+                "SlurmUser=root",
+                "AuthType=auth/munge",
+                f"StateSaveLocation={base}/state",
+                f"SlurmdSpoolDir={base}/spool",
+                f"SlurmctldPidFile={base}/ctld.pid",
+                f"SlurmdPidFile={base}/d.pid",
+                f"SlurmctldLogFile={base}/log/ctld.log",
+                f"SlurmdLogFile={base}/log/d.log",
+                "ProctrackType=proctrack/linuxproc",
+                "TaskPlugin=task/none",
+                "JobAcctGatherType=jobacct_gather/none",
+                "SelectType=select/cons_tres",
+                "SelectTypeParameters=CR_CPU",
+                "MpiDefault=pmix",
+                "ReturnToService=2",
+                "MailProg=/bin/true",
+                "MinJobAge=5",
+                "SchedulerParameters=batch_sched_delay=0",
+                node[0],
+                f"PartitionName=debug Nodes={host} Default=YES MaxTime=INFINITE State=UP",
+                "",
+            ]
+        )
+    )
+    env = {**os.environ, "SLURM_CONF": str(conf)}
+    for var in LAUNCHER_VARS:
+        env.pop(var, None)
+    started = []
+    if subprocess.run(["munge", "-n"], capture_output=True).returncode != 0:
+        Path("/run/munge").mkdir(parents=True, exist_ok=True)
+        shutil.chown("/run/munge", "munge", "munge")
+        started.append(
+            subprocess.Popen(
+                ["setpriv", "--reuid=munge", "--regid=munge", "--init-groups", "munged", "-F"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+            )
+        )
+        time.sleep(0.3)
+    for daemon in ("slurmctld", "slurmd"):
+        started.append(
+            subprocess.Popen(
+                [daemon, "-D"], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+            )
+        )
+
+    def stop():
+        for proc in reversed(started):
+            proc.terminate()
+        for proc in reversed(started):
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+    deadline = time.monotonic() + 20
+    while True:
+        state = subprocess.run(
+            ["sinfo", "-h", "-o", "%T"], env=env, capture_output=True, text=True
+        ).stdout.strip()
+        if state == "idle":
+            break
+        if time.monotonic() > deadline or any(p.poll() is not None for p in started):
+            stop()
+            log = base / "log/ctld.log"
+            tail = log.read_text().splitlines()[-1:] if log.exists() else []
+            pytest.skip(f"slurmctld/slurmd did not come up (sinfo: {state!r}) {tail}")
+        time.sleep(0.2)
+    yield env
+    stop()
+
+
+@pytest.mark.slow
+def test_slurm_sweep_script_runs_under_sbatch_and_resumes(slurm, tmp_path):
+    """sbatch scripts/slurm_sweep.sh (2 tasks, srun + mpi4py over PMIx) on a tiny transient
+    sweep: the batch script (a spool copy) finds the repository from $SLURM_SUBMIT_DIR, the
+    two ranks share the points, every row is in sweep.csv and the log has a line per point; a
+    resubmission with --resume runs nothing."""
+    out = tmp_path / "sweep"
+    log = tmp_path / "job.log"
+    extra = [str(BEAM), *BEAM_SET, *SHORT_RUN, "--frequencies", "2,8", "--waveforms", "sine"]
+    extra += ["--output", str(out)]
+    submit = ["sbatch", "--wait", "--ntasks=2", "--time=20", f"--output={log}"]
+    job = subprocess.run(
+        [*submit, "scripts/slurm_sweep.sh", *extra],
+        cwd=ROOT,
+        env=slurm,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    text = log.read_text() if log.exists() else ""
+    assert job.returncode == 0, job.stderr + text
+    assert points(table(out)) == [("sine", 2.0), ("sine", 8.0)]
+    assert all(r["status"] == "ok" for r in table(out))
+    assert "sweep: 2 points (transient, 2 MPI ranks)" in text
+    done = [line.split(":")[1].split() for line in text.splitlines() if "sweep: point" in line]
+    assert sorted(d[1] for d in done) == ["1/2", "2/2"]  # counted over both ranks
+    assert sorted(d[3] for d in done) == ["2", "8"]
+    log.unlink()
+    job = subprocess.run(
+        [*submit, "scripts/slurm_sweep.sh", *extra, "--resume"],
+        cwd=ROOT,
+        env=slurm,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    text = log.read_text()
+    assert job.returncode == 0, job.stderr + text
+    assert "2 done before (--resume)" in text and "sweep: point" not in text
