@@ -173,6 +173,30 @@ def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
     assert calls == [(f"sine_{f}Hz", False) for f in (2, 4, 6, 8)]
 
 
+def test_sigterm_stops_the_sweep_with_its_rows_kept_and_says_resume(tmp_path, monkeypatch, capsys):
+    """SLURM's time limit (and scancel) sends SIGTERM: the sweep stops in one line, exit 130,
+    its finished rows kept; afterwards SIGTERM is back to what it was."""
+    calls: list = []
+
+    def stub(case, output, resume, show_progress):
+        calls.append(output.name)
+        if case.actuation.frequency_hz == 4.0:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)  # the signal arrives first
+        return {"tip_amplitude_m": 1e-3}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
+    args += ["--method", "transient", "--output", str(out)]
+    assert sweep_cli.main(args) == EXIT_INTERRUPTED
+    assert calls == ["sine_2Hz", "sine_4Hz"]
+    assert points(table(out)) == [("sine", 2.0)]
+    err = capsys.readouterr().err.strip()
+    assert err == "interrupted: results so far are kept; continue with --resume"
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+
+
 def test_a_transient_point_with_a_nan_result_fails_the_sweep(tmp_path, monkeypatch, capsys):
     """A run that returns NaN (no exception) is a failed row: exit 1, the other rows kept. A
     figure the run does not give (a beam's thrust) stays NaN without failing."""

@@ -523,7 +523,36 @@ def print_table(rows: list[dict]) -> None:
         )
 
 
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (SLURM's time limit, scancel) as Ctrl-C: the running point's fluid is shut
+    down, the finished rows are kept and the sweep says to --resume (exit 130). Only where
+    nothing else handles SIGTERM already; the old handler comes back afterwards."""
+    import signal
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+            yield
+            return
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def _body(args: argparse.Namespace) -> int:
+    with sigterm_as_interrupt():
+        return _sweep(args)
+
+
+def _sweep(args: argparse.Namespace) -> int:
     comm = mpi_world()  # first: a mismatched launch stops before any work
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     case = load(args)
