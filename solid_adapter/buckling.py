@@ -7,9 +7,10 @@ and beside the active areas); with the seed-stress drive the same voltage pulls 
 the active areas' edges (tension). The load factor at which the prestress buckles the plate is
 the smallest positive lambda of
 
-    (K0 + lambda K1) phi = 0,   K1 = d K_T(lambda x1, lambda V) / d lambda at 0,
+    (K0 + lambda K1) phi = 0,   K1 = d K_sigma(lambda x1, lambda V) / d lambda at 0,
 
-with x1 the linear response to the mean voltage; lambda > 1 means the mean voltage is carried
+with x1 the linear response to the mean voltage and K_sigma the stress (geometric) part of the
+tangent; lambda > 1 means the mean voltage is carried
 without buckling (lambda < 0 only: the prestress stiffens the plate, no buckling at all).
 """
 
@@ -41,8 +42,12 @@ def buckling_factor(model: ShellModel, volts: NDArray, modes: int = 6) -> float:
     K0ff = sp.csc_matrix(K0[free][:, free])
     x1 = np.zeros(model.ndof)
     x1[free] = spla.spsolve(K0ff, load[free])
-    K_step = model.internal(STEP * x1, STEP * volts)[1]
-    K1ff = sp.csc_matrix(((K_step - K0) / STEP)[free][:, free])
+    # the stress part of the tangent only: the material part's change with the displacement
+    # (B(u)) is no instability; a unimorph bends under its mean and that part is indefinite
+    K_step = model.internal(STEP * x1, STEP * volts)[1] - model.material_stiffness(STEP * x1)
+    if model.support is not None:
+        K_step = K_step - model.support
+    K1ff = sp.csc_matrix((K_step / STEP)[free][:, free])
     K1ff = 0.5 * (K1ff + K1ff.T)
     # -K1 phi = mu K0 phi with K0 positive definite; lambda = 1 / mu for mu > 0
     v0 = np.random.default_rng(0).standard_normal(K0ff.shape[0])

@@ -19,6 +19,7 @@ from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
 from .shell import NDOF, ShellModel
 from .solvers import (
+    CombinedDamping,
     NewtonSettings,
     RayleighDamping,
     TimeIntegrator,
@@ -82,6 +83,14 @@ def rayleigh_damping(case: Case, model: ShellModel) -> RayleighDamping | None:
     return RayleighDamping(a, b) if (a or b) else None
 
 
+def build_damping(case: Case, model: ShellModel):
+    """Rayleigh damping plus the fast fluid's damping the model carries, or None."""
+    parts = [d for d in (rayleigh_damping(case, model), model.fluid_damping) if d is not None]
+    if not parts:
+        return None
+    return parts[0] if len(parts) == 1 else CombinedDamping(tuple(parts))
+
+
 def bending_frequencies(model: ShellModel, count: int) -> NDArray:
     """The lowest ``count`` bending-mode frequencies (Hz) of the model with its inertia."""
     result = modal_analysis(model, 3 * count + 3)
@@ -99,7 +108,7 @@ def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
         a.integrator.value,
         model,
         a.rho_infinity,
-        rayleigh_damping(case, model),
+        build_damping(case, model),
         newton_settings(case),
     )
 
@@ -124,6 +133,7 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
 # velocity of 7 m/s at t = 0, which generalized-alpha damps away in a few steps and which
 # crashed the CFD lead-in (docs/coupling.md).
 MIN_STEPS_PER_HARMONIC = 8
+ORBIT_DAMPING_ITERATIONS = 60
 
 
 def resolved_harmonics(case: Case) -> int:
@@ -156,10 +166,25 @@ def periodic_orbit(
     """The linear periodic response about the mean-voltage equilibrium, with an optional
     fluid force the inertia does not hold (see ModalCorrection)."""
     x_static = mean_voltage_equilibrium(case, model, drive, loads)
-    damping = integrator.damping.linear(model) if integrator.damping is not None else None
-    return periodic_response(
+    damping_model = integrator.damping
+    damping = damping_model.linear(model) if damping_model is not None else None
+    orbit = periodic_response(
         model, drive, x_static, damping, resolved_harmonics(case), correction=correction
     )
+    if damping_model is None or not damping_model.amplitude_dependent:
+        return orbit
+    # an amplitude-dependent damping (the fluid's edge drag) linearized about the orbit's own
+    # fundamental: fixed point, half relaxed (the amplitude falls as the damping grows)
+    tip = model.mesh.nearest_node(*model.layout.tip_point) * NDOF + 2
+    for _ in range(ORBIT_DAMPING_ITERATIONS):
+        damping = 0.5 * damping + 0.5 * damping_model.linear(model, orbit)
+        previous = abs(orbit.harmonics[0][1][tip])
+        orbit = periodic_response(
+            model, drive, x_static, damping, resolved_harmonics(case), correction=correction
+        )
+        if abs(abs(orbit.harmonics[0][1][tip]) - previous) <= 1e-4 * previous:
+            break
+    return orbit
 
 
 class CorrectableStart:

@@ -140,6 +140,9 @@ class ShellModel:
         # integrator's own acceleration
         self.added_mass_stencil: tuple[float, ...] | None = None
         self.inertia = self.mass  # structural mass plus any fluid added mass
+        # a fast fluid's damping (force(model, x, v), linear(model, orbit)) beside its added
+        # mass: the edge drag of fluid_adapter.drag; None: none
+        self.fluid_damping = None
         # seed-stress drive (seed Sec. 3.5.2.1): eq. 3-10's stress applied as dead loads, the
         # internal force of the flat plate under each actuator's unit voltage (2, ndof);
         # None: the induced strain (eigenstrain) of the MFC layers

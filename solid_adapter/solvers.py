@@ -438,10 +438,30 @@ class RayleighDamping:
             C = C + self.beta * model.material_stiffness(x)
         return C @ v, C
 
-    def linear(self, model: ShellModel) -> sp.spmatrix:
+    amplitude_dependent = False
+
+    def linear(self, model: ShellModel, orbit=None) -> sp.spmatrix:
         """alpha M + beta K0, for linear (harmonic, modal) analyses about the flat plate."""
         K0 = model.internal(model.zero_state(), np.zeros(2))[1]
         return self.alpha * model.inertia + self.beta * K0
+
+
+@dataclass(frozen=True)
+class CombinedDamping:
+    """The sum of damping models (Rayleigh, a fast fluid's drag): force and linear summed."""
+
+    parts: tuple
+
+    @property
+    def amplitude_dependent(self) -> bool:
+        return any(p.amplitude_dependent for p in self.parts)
+
+    def force(self, model: ShellModel, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]:
+        forces, tangents = zip(*(p.force(model, x, v) for p in self.parts), strict=True)
+        return sum(forces), sum(tangents)
+
+    def linear(self, model: ShellModel, orbit=None) -> sp.spmatrix:
+        return sum(p.linear(model, orbit) for p in self.parts)
 
 
 class TimeIntegrator:

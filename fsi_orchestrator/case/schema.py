@@ -539,6 +539,13 @@ class Fluid:
         ge=0,
         lt=1,
     )
+    edge_drag: bool = param(
+        False,
+        "potential/slender_body: add the separated-flow drag of the plate's edges, "
+        "C_D = 9.82 KC^-0.224 per unit area, fitted to OpenFOAM's lateral force on the same "
+        "motion (fluid_adapter/drag.py, benchmarks/fast_fluid_damping.py): the fast model's "
+        "fluid damping from a measured source, in transients and the periodic start.",
+    )
     added_mass_coefficient: float = param(
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )

@@ -32,6 +32,12 @@ def shell_with_fast_fluid(case: Case):
     added = fast_added_mass(case, model)
     if added is not None:
         model.set_added_mass(added.matrix)
+        if case.fluid.edge_drag:
+            from fluid_adapter.drag import edge_drag
+
+            model.fluid_damping = edge_drag(
+                model, case.fluid.density_kg_m3, case.actuation.frequency_hz
+            )
     return model, added
 
 
