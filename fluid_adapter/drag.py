@@ -32,6 +32,8 @@ from scipy.special import gamma
 DRAG_C0 = 9.82
 DRAG_Q = 0.224
 NDOF = 5  # the shell's DOFs per node (u_x, u_y, u_z, theta_1, theta_2)
+# below this normal speed the power law is smoothed (0.02 % of the force at 0.05 m/s)
+SMOOTH_SPEED_M_S = 1e-3
 
 
 def harmonic_balance_factor(p: float) -> float:
@@ -53,12 +55,15 @@ class EdgeDrag:
     amplitude_dependent = True
 
     def force(self, model, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]:
+        """|v|^p smoothed below SMOOTH_SPEED_M_S, (v^2 + v0^2)^(p/2): the law's second
+        derivative is unbounded at v = 0, and Newton stalled on the nodes near a clamp."""
         vz = v[2::NDOF]
-        speed = np.abs(vz) ** self.exponent
+        s2 = vz**2 + SMOOTH_SPEED_M_S**2
+        speed = s2 ** (self.exponent / 2)
         f = np.zeros_like(v)
         f[2::NDOF] = self.coefficients * speed * vz
         tangent = np.zeros_like(v)
-        tangent[2::NDOF] = (1 + self.exponent) * self.coefficients * speed
+        tangent[2::NDOF] = self.coefficients * speed * (1 + self.exponent * vz**2 / s2)
         return f, sp.diags(tangent).tocsr()
 
     def linear(self, model, orbit=None) -> sp.spmatrix:

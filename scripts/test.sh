@@ -1,6 +1,13 @@
 #!/usr/bin/env bash
 # The test suite: set up (if needed), then pytest. Extra arguments go to pytest.
+# The cluster-sweep test starts a real one-node SLURM (tests/test_sweep_cluster.py): as root,
+# SLURM and munge are installed for it when missing (about 10 s; without them it is skipped).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+if [ "$(id -u)" -eq 0 ] && ! command -v slurmctld >/dev/null 2>&1; then
+  echo "test: installing SLURM and munge for the cluster-sweep test" >&2
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -q slurm-wlm munge libpmix-dev >/dev/null \
+    || echo "test: SLURM could not be installed; the cluster-sweep test will be skipped" >&2
+fi
 exec .venv/bin/python -m pytest "$@"

@@ -222,10 +222,20 @@ class ModalSweep:
             modal_load=result.shapes @ load,
         )
 
-    def response(self, omega: float) -> NDArray:
+    def response(self, omega: float, modal_damping: NDArray | None = None) -> NDArray:
+        """``modal_damping``: a damping beyond Rayleigh's in modal coordinates, phi^T C phi
+        (m x m, it couples the modes), e.g. the fluid's edge drag linearized."""
         wj = self.omegas
-        dynamic = 1.0 / (wj**2 - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
-        return self.static + (self.modal_load * dynamic) @ self.shapes
+        if modal_damping is None:
+            dynamic = 1.0 / (wj**2 - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
+            return self.static + (self.modal_load * dynamic) @ self.shapes
+        A = np.diag(wj**2 - omega**2 + 2j * self.zetas * wj * omega) + 1j * omega * modal_damping
+        q = np.linalg.solve(A, self.modal_load) - self.modal_load / wj**2
+        return self.static + q @ self.shapes
+
+    def modal_damping(self, damping: sp.spmatrix) -> NDArray:
+        """phi^T C phi of a damping matrix."""
+        return self.shapes @ (damping @ self.shapes.T)
 
 
 def harmonic_load(model: ShellModel, drive: DriveSignal, x: NDArray | None = None) -> NDArray:
@@ -237,10 +247,37 @@ def harmonic_load(model: ShellModel, drive: DriveSignal, x: NDArray | None = Non
 
 
 def sweep_response(
-    sweep: ModalSweep, drive: DriveSignal, x_static: NDArray, n_harmonics: int = 15
+    sweep: ModalSweep,
+    drive: DriveSignal,
+    x_static: NDArray,
+    n_harmonics: int = 15,
+    modal_damping: NDArray | None = None,
 ) -> PeriodicResponse:
     omega = 2 * np.pi * drive.frequency_hz
     harmonics = [
-        (k, c * sweep.response(k * omega)) for k, c in harmonic_amplitudes(drive, n_harmonics)
+        (k, c * sweep.response(k * omega, modal_damping))
+        for k, c in harmonic_amplitudes(drive, n_harmonics)
     ]
     return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
+
+
+def damped_sweep_response(
+    sweep: ModalSweep,
+    drive: DriveSignal,
+    x_static: NDArray,
+    damping_model,
+    model: ShellModel,
+    tip_dof: int,
+    iterations: int = 60,
+) -> PeriodicResponse:
+    """sweep_response with an amplitude-dependent damping (the fluid's edge drag),
+    linearized about the response's own fundamental: fixed point, half relaxed."""
+    response = sweep_response(sweep, drive, x_static)
+    modal = np.zeros((len(sweep.omegas), len(sweep.omegas)))
+    for _ in range(iterations):
+        previous = abs(response.harmonics[0][1][tip_dof])
+        modal = 0.5 * modal + 0.5 * sweep.modal_damping(damping_model.linear(model, response))
+        response = sweep_response(sweep, drive, x_static, modal_damping=modal)
+        if abs(abs(response.harmonics[0][1][tip_dof]) - previous) <= 1e-4 * previous:
+            break
+    return response

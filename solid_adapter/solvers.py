@@ -26,6 +26,12 @@ LoadFn = Callable[[float, NDArray, bool], tuple[NDArray, sp.spmatrix | None]]
 VoltFn = Callable[[float], NDArray]
 
 
+# A scaled Newton increment (plate lengths, radians) below this is round-off: a plate at rest
+# in equilibrium (a square wave before its first switch) has a first increment of that size, and
+# a tolerance relative to it could never be met
+ROUND_OFF_INCREMENT = 1e-12
+
+
 class SolverError(RuntimeError):
     """The structural solve failed (no convergence, NaN); the message says where and why."""
 
@@ -195,7 +201,7 @@ def newton(
             solve, r, K = None, None, None
             continue
         limit = settings.tolerance * max(full if first is None else first, reference, 1e-300)
-        if full <= limit or full < 1e-15:
+        if full <= limit or full < ROUND_OFF_INCREMENT:
             # converged on the full step, which the line search takes once the increments are
             # this small: the residual and tangent at x + dx would go unused (about a quarter
             # of a coupled re-solve's assembly)
@@ -209,7 +215,7 @@ def newton(
         x += step * dx
         size = step * full
         first = size if first is None else first
-        if size <= settings.tolerance * max(first, reference, 1e-300) or size < 1e-15:
+        if size <= settings.tolerance * max(first, reference, 1e-300) or size < ROUND_OFF_INCREMENT:
             return x, it
         previous = full
         if not keep or step != 1.0:
@@ -335,7 +341,7 @@ def relax_fast_dofs(
         x += dx
         size = np.max(np.abs(dx))
         first = size if first is None else first
-        if size <= settings.tolerance * max(first, 1e-300) or size < 1e-15:
+        if size <= settings.tolerance * max(first, 1e-300) or size < ROUND_OFF_INCREMENT:
             break
     K = model.internal(x, volts)[1]
     lu = factorize(sp.csc_matrix(K[fast][:, fast]))

@@ -13,7 +13,7 @@ from tests.conftest import ROOT
 
 def _dry_modes(*overrides: str) -> np.ndarray:
     case = load_case(
-        ROOT / "cases" / "seed" / "amplitude_3Hz",
+        ROOT / "cases" / "fixed_head_3Hz",
         ["fluid.model=none", "mesh.level=coarse", *overrides],
     )
     return modal_analysis(build_shell_model(case), 8).frequencies_hz

@@ -97,10 +97,12 @@ def linear_sweep(
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
     if not jobs:
         return []
+    from fluid_adapter.drag import edge_drag
     from fluid_adapter.slender_body import mean_thrust_from_shell
     from solid_adapter.build import mean_voltage_equilibrium, rayleigh_coefficients, static_loads
     from solid_adapter.harmonic import (
         ModalSweep,
+        damped_sweep_response,
         harmonic_load,
         mean_voltage_tangent,
         sweep_response,
@@ -132,7 +134,11 @@ def linear_sweep(
         start = time.perf_counter()
         drive = DriveSignal.from_case(with_drive(case, f, waveform))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            response = sweep_response(sweep, drive, x_static)
+            if case.fluid.edge_drag:  # the fluid's damping at this drive frequency
+                drag = edge_drag(model, case.fluid.density_kg_m3, f)
+                response = damped_sweep_response(sweep, drive, x_static, drag, model, tip * 5 + 2)
+            else:
+                response = sweep_response(sweep, drive, x_static)
             times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
             h = response.dof_history(midline * 5 + 2, times)
             tip_z = response.dof_history(np.array([tip * 5 + 2]), times)[:, 0]
@@ -599,11 +605,12 @@ def _sweep(args: argparse.Namespace) -> int:
         if rank != 0:  # seconds on one rank: the others have nothing to do
             return EXIT_OK
         case = without_cfd(case)
-        if case.fluid.model is not FluidModel.NONE and case.fluid.damping_ratio == 0:
+        undamped = case.fluid.damping_ratio == 0 and not case.fluid.edge_drag
+        if case.fluid.model is not FluidModel.NONE and undamped:
             print(
-                "note: fluid.damping_ratio = 0: the linear sweep has no damping, so near the "
-                "wet resonances its amplitudes grow without bound; e.g. --set "
-                "fluid.damping_ratio=0.05",
+                "note: no fluid damping: the linear sweep's amplitudes grow without bound near "
+                "the wet resonances; --set fluid.edge_drag=true adds the separated-flow drag "
+                "fitted to OpenFOAM (docs/validation.md)",
                 file=sys.stderr,
             )
         linear_sweep(case, frequencies, waveforms, done, on_row)

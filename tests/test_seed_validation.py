@@ -1,0 +1,99 @@
+"""The robot model held to the seed's experiments (docs/validation.md): the calibration set of
+the original fish, and the predictions with the calibration frozen in cases/seed/*.
+
+The fast model of benchmarks/seed_validation.py: coarse shell, potential flow in the tank, the
+edge drag fitted to OpenFOAM, the linear periodic response. Targets the model misses are strict
+xfails: they fail the suite once the model meets them, so the docs get updated.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from tests.conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import seed_validation as sv  # noqa: E402
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def fast():
+    return sv.FastModel(cache={})
+
+
+def _frozen(name: str, *overrides: str):
+    """The case as frozen (the calibrated values are in its case.toml), fast fluid."""
+    from fsi_orchestrator.case.loader import load_case
+
+    return load_case(sv.SEED / name, ["fluid.model=potential", *overrides])
+
+
+def _first_bending(fast, name: str) -> float:
+    return fast.bending_modes(_frozen(name, "boundary.head=free"), 1)[0]
+
+
+def test_calibration_original_first_wet_mode(fast):
+    """Table 4.2: 6 Hz measured (Table 3.7: 5.99 Hz simulated), fitted with the CFRP modulus."""
+    assert _first_bending(fast, "amplitude_3Hz") == pytest.approx(6.0, rel=0.02)
+
+
+def test_calibration_original_amplitudes(fast):
+    """Fig. 4.4: 19 mm at 3 Hz sine; Fig. 4.8: 24.7 mm at 1 Hz square, head held. One
+    electrode spacing and one held length cannot give both: the fit leaves -25 % / +16 %."""
+    sine = fast.orbit(_frozen("amplitude_3Hz"))["tip_mm"]
+    square = fast.orbit(_frozen("fixed_head_sweep"))["tip_mm"]
+    assert sine == pytest.approx(19.0, rel=0.30)
+    assert square == pytest.approx(24.7, rel=0.20)
+    assert sine / square < 19.0 / 24.7  # the model's 1 Hz / 3 Hz ratio is the open gap
+
+
+def test_original_second_wet_mode_is_a_prediction_within_10_percent(fast):
+    """Table 4.2: 25 Hz measured; not fitted."""
+    modes = fast.bending_modes(_frozen("amplitude_3Hz", "boundary.head=free"), 2)
+    assert modes[1] == pytest.approx(25.0, rel=0.10)
+
+
+@pytest.mark.xfail(strict=True, reason="serial f1 5.3 Hz vs 4 Hz measured (+32 %): planform")
+def test_serial_first_wet_mode_within_10_percent(fast):
+    """Table 5.3: 4 Hz measured (Table 5.1: 3.95 Hz simulated)."""
+    assert _first_bending(fast, "serial_prototype") == pytest.approx(4.0, rel=0.10)
+
+
+@pytest.mark.xfail(strict=True, reason="integrative f1 3.3 Hz vs 2 Hz measured (+63 %)")
+def test_integrative_first_wet_mode_within_10_percent(fast):
+    """Table 5.7: 2 Hz measured (Table 5.5: 2.5 Hz simulated)."""
+    assert _first_bending(fast, "integrative_prototype") == pytest.approx(2.0, rel=0.10)
+
+
+@pytest.fixture(scope="module")
+def thrust_curve(fast):
+    frequencies = (3, 5, 10, 13, 15, 18, 20, 22, 25)
+    return {
+        f: fast.orbit(_frozen("thrust_rig", f"actuation.frequency_hz={f}"))["thrust_n"]
+        for f in frequencies
+    }
+
+
+def test_thrust_peaks_where_the_rig_measured_it(thrust_curve):
+    """Fig. 4.6: the held fish's thrust peaks at 18 Hz (target 15-20 Hz)."""
+    peak = max(thrust_curve, key=thrust_curve.get)
+    assert 15 <= peak <= 20
+    assert all(np.isfinite(v) and v > 0 for v in thrust_curve.values())
+
+
+@pytest.mark.xfail(strict=True, reason="slender-body thrust at the peak 0.75 N, rig <= 0.107 N")
+def test_peak_thrust_within_what_the_rig_could_read(thrust_curve):
+    """Sec. 4.3.1: 0.5 N load cell x 45 / 210 mm lever = 0.107 N at most."""
+    assert max(thrust_curve.values()) <= 0.107
+
+
+@pytest.mark.xfail(strict=True, reason="model 5 Hz / 3 Hz thrust 1.23; measured below 1")
+def test_5hz_thrust_below_3hz_thrust(thrust_curve):
+    """Sec. 4.3.2: the 5 Hz thrust is below the 3 Hz thrust."""
+    assert thrust_curve[5] < thrust_curve[3]
