@@ -496,6 +496,7 @@ def slurm(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.slurm
 def test_slurm_sweep_script_runs_under_sbatch_and_resumes(slurm, tmp_path):
     """sbatch scripts/slurm_sweep.sh (2 tasks, srun + mpi4py over PMIx) on a tiny transient
     sweep: the batch script (a spool copy) finds the repository from $SLURM_SUBMIT_DIR, the
