@@ -45,16 +45,10 @@ from fsi_orchestrator.case.loader import load_case  # noqa: E402
 from solid_adapter.build import (  # noqa: E402
     build_shell_model,
     mean_voltage_equilibrium,
-    rayleigh_coefficients,
+    mean_voltage_modal_sweep,
     static_loads,
 )
-from solid_adapter.harmonic import (  # noqa: E402
-    ModalSweep,
-    damped_sweep_response,
-    harmonic_load,
-    mean_voltage_tangent,
-    sweep_response,
-)
+from solid_adapter.harmonic import damped_sweep_response, sweep_response  # noqa: E402
 from solid_adapter.piezo import DriveSignal  # noqa: E402
 from solid_adapter.shell import NDOF  # noqa: E402
 from solid_adapter.solvers import modal_analysis, mode_kind  # noqa: E402
@@ -112,13 +106,7 @@ class FastModel:
         model = self.model(case)
         drive = DriveSignal.from_case(case)
         x_static = mean_voltage_equilibrium(case, model, drive, static_loads(case, model))
-        sweep = ModalSweep.build(
-            model,
-            harmonic_load(model, drive, x_static),
-            MODES,
-            rayleigh_coefficients(case, model),
-            stiffness=mean_voltage_tangent(model, x_static, drive),
-        )
+        sweep = mean_voltage_modal_sweep(case, model, drive, x_static, MODES)
         nodes = model.mesh.nodes
         midline = np.flatnonzero(np.abs(nodes[:, 1]) < 1e-12)
         midline = midline[np.argsort(nodes[midline, 0])]

@@ -13,7 +13,15 @@ from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
 from .buckling import check_mean_voltage
 from .geometry import build_layout
-from .harmonic import ModalCorrection, PeriodicResponse, mean_volts, periodic_response
+from .harmonic import (
+    ModalCorrection,
+    ModalSweep,
+    PeriodicResponse,
+    harmonic_load,
+    mean_voltage_tangent,
+    mean_volts,
+    periodic_response,
+)
 from .mesh import build_mesh
 from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
@@ -152,6 +160,20 @@ def mean_voltage_equilibrium(
     check_mean_voltage(model, mean)
     return solve_static(
         model, static_load_function(model, loads), lambda lam: lam * mean, 4, newton_settings(case)
+    )
+
+
+def mean_voltage_modal_sweep(
+    case: Case, model: ShellModel, drive: DriveSignal, x_static: NDArray, modes: int
+) -> ModalSweep:
+    """The (wet) plate's frequency response by modal superposition about the mean-voltage
+    equilibrium x_static, with the case's Rayleigh damping (fsi-sweep --method linear)."""
+    return ModalSweep.build(
+        model,
+        harmonic_load(model, drive, x_static),
+        modes,
+        rayleigh_coefficients(case, model),
+        stiffness=mean_voltage_tangent(model, x_static, drive),
     )
 
 

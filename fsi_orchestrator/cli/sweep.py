@@ -99,14 +99,12 @@ def linear_sweep(
         return []
     from fluid_adapter.drag import edge_drag
     from fluid_adapter.slender_body import mean_thrust_from_shell
-    from solid_adapter.build import mean_voltage_equilibrium, rayleigh_coefficients, static_loads
-    from solid_adapter.harmonic import (
-        ModalSweep,
-        damped_sweep_response,
-        harmonic_load,
-        mean_voltage_tangent,
-        sweep_response,
+    from solid_adapter.build import (
+        mean_voltage_equilibrium,
+        mean_voltage_modal_sweep,
+        static_loads,
     )
+    from solid_adapter.harmonic import damped_sweep_response, sweep_response
     from solid_adapter.piezo import DriveSignal
 
     model, _ = shell_with_fast_fluid(case)
@@ -117,13 +115,7 @@ def linear_sweep(
             "linear sweep, static step: the equilibrium under the mean voltages is not finite"
         )
     with np.errstate(divide="ignore", invalid="ignore"):  # checked below, in one line
-        sweep = ModalSweep.build(
-            model,
-            harmonic_load(model, drive0, x_static),
-            MODES,
-            rayleigh_coefficients(case, model),
-            stiffness=mean_voltage_tangent(model, x_static, drive0),
-        )
+        sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES)
     check_modal_sweep(sweep)
     midline = _midline(model)
     xs = model.mesh.nodes[midline, 0]
