@@ -18,6 +18,7 @@ from .harmonic import (
     ModalSweep,
     PeriodicResponse,
     harmonic_load,
+    linearized_damping_response,
     mean_voltage_tangent,
     mean_volts,
     periodic_response,
@@ -141,7 +142,6 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
 # velocity of 7 m/s at t = 0, which generalized-alpha damps away in a few steps and which
 # crashed the CFD lead-in (docs/coupling.md).
 MIN_STEPS_PER_HARMONIC = 8
-ORBIT_DAMPING_ITERATIONS = 60
 
 
 def resolved_harmonics(case: Case) -> int:
@@ -189,24 +189,19 @@ def periodic_orbit(
     fluid force the inertia does not hold (see ModalCorrection)."""
     x_static = mean_voltage_equilibrium(case, model, drive, loads)
     damping_model = integrator.damping
-    damping = damping_model.linear(model) if damping_model is not None else None
-    orbit = periodic_response(
-        model, drive, x_static, damping, resolved_harmonics(case), correction=correction
-    )
-    if damping_model is None or not damping_model.amplitude_dependent:
-        return orbit
-    # an amplitude-dependent damping (the fluid's edge drag) linearized about the orbit's own
-    # fundamental: fixed point, half relaxed (the amplitude falls as the damping grows)
-    tip = model.mesh.nearest_node(*model.layout.tip_point) * NDOF + 2
-    for _ in range(ORBIT_DAMPING_ITERATIONS):
-        damping = 0.5 * damping + 0.5 * damping_model.linear(model, orbit)
-        previous = abs(orbit.harmonics[0][1][tip])
-        orbit = periodic_response(
+
+    def solve(damping):
+        return periodic_response(
             model, drive, x_static, damping, resolved_harmonics(case), correction=correction
         )
-        if abs(abs(orbit.harmonics[0][1][tip]) - previous) <= 1e-4 * previous:
-            break
-    return orbit
+
+    if damping_model is None or not damping_model.amplitude_dependent:
+        return solve(damping_model.linear(model) if damping_model is not None else None)
+    # an amplitude-dependent damping (the fluid's edge drag), linearized about the orbit
+    tip = model.mesh.nearest_node(*model.layout.tip_point) * NDOF + 2
+    return linearized_damping_response(
+        solve, lambda orbit: damping_model.linear(model, orbit), damping_model.linear(model), tip
+    )
 
 
 class CorrectableStart:

@@ -268,16 +268,29 @@ def damped_sweep_response(
     damping_model,
     model: ShellModel,
     tip_dof: int,
-    iterations: int = 60,
 ) -> PeriodicResponse:
-    """sweep_response with an amplitude-dependent damping (the fluid's edge drag),
-    linearized about the response's own fundamental: fixed point, half relaxed."""
-    response = sweep_response(sweep, drive, x_static)
-    modal = np.zeros((len(sweep.omegas), len(sweep.omegas)))
+    """sweep_response with an amplitude-dependent damping (the fluid's edge drag) in modal
+    coordinates, linearized about the response itself (linearized_damping_response)."""
+    return linearized_damping_response(
+        lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
+        lambda response: sweep.modal_damping(damping_model.linear(model, response)),
+        np.zeros((len(sweep.omegas), len(sweep.omegas))),
+        tip_dof,
+    )
+
+
+def linearized_damping_response(
+    solve, linearize, damping, tip_dof: int, iterations: int = 60
+) -> PeriodicResponse:
+    """The periodic response under an amplitude-dependent damping, linearized about the
+    response's own fundamental: fixed point on ``solve(damping)`` from ``damping``, half
+    relaxed (the amplitude falls as the damping grows), until the tail's fundamental changes
+    by less than 1e-4."""
+    response = solve(damping)
     for _ in range(iterations):
         previous = abs(response.harmonics[0][1][tip_dof])
-        modal = 0.5 * modal + 0.5 * sweep.modal_damping(damping_model.linear(model, response))
-        response = sweep_response(sweep, drive, x_static, modal_damping=modal)
+        damping = 0.5 * damping + 0.5 * linearize(response)
+        response = solve(damping)
         if abs(abs(response.harmonics[0][1][tip_dof]) - previous) <= 1e-4 * previous:
             break
     return response
