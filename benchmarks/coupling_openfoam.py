@@ -62,7 +62,7 @@ RUNS = {
     # the accuracy a looser tolerance buys back (difference to the reference below)
     "iqn-ils-am-1e-3": ["coupling.scheme=iqn-ils-am", "coupling.tolerance_rel=1e-3"],
     "explicit-am": ["coupling.scheme=explicit-am"],
-    # the structure factoring a fresh tangent every Newton iteration (before stop 22)
+    # the structure factoring a fresh tangent every Newton iteration (no kept tangent)
     "iqn-ils-am-fresh-tangent": ["coupling.scheme=iqn-ils-am", "analysis.reuse_tangent=false"],
     "explicit-am-fresh-tangent": ["coupling.scheme=explicit-am", "analysis.reuse_tangent=false"],
     # the case's driver keeps pimpleFoam loaded (persistent); with one launch per solve instead
