@@ -1,0 +1,179 @@
+"""Runs a study's designs: each one once (a design asked for again, or finished before a
+``--resume``, is looked up), in batches, in this process, a process pool or over MPI ranks.
+
+Every finished evaluation is on disk (``evaluations/NNNN/summary.json``) before the next batch
+starts; the tables are merged from those files. ``OUTPUT/study.json`` holds the study's
+identity: ``--resume`` refuses an output folder of another study.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as futures
+import json
+import shutil
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from ..case import CaseError
+from .evaluate import Design, EvaluationSpec, design_key, evaluate, read_record
+from .study import Study
+
+IDENTITY_FILE = "study.json"
+
+OnRecord = Callable[[dict], None]
+
+
+def study_identity(study: Study, spec: EvaluationSpec) -> dict:
+    from .. import __version__
+
+    identity = {"version": __version__, "study": study.identity(), "base": spec.base_raw}
+    return json.loads(json.dumps(identity, default=str))
+
+
+def prepare_output(output: Path, identity: dict, resume: bool) -> dict[str, dict]:
+    """The finished records to reuse (by design key) with ``resume``, else none (and the
+    evaluations an earlier study left in ``output`` go)."""
+    from .evaluate import atomic_write
+
+    evaluations = output / "evaluations"
+    try:
+        evaluations.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+    identity_file = output / IDENTITY_FILE
+    done: dict[str, dict] = {}
+    if resume:
+        if identity_file.is_file():
+            try:
+                old = json.loads(identity_file.read_text())
+            except (OSError, ValueError):
+                old = None
+            if old != identity:
+                raise CaseError(
+                    f"--resume: {output} holds evaluations of another study (its study.toml, "
+                    "base case or version differ); use another --output, or drop --resume"
+                )
+        for folder in sorted(evaluations.iterdir()):
+            record = read_record(folder)
+            if record is not None and record.get("status") in ("ok", "infeasible"):
+                done[record["key"]] = record  # a failed design is tried again
+    else:
+        shutil.rmtree(evaluations)
+        evaluations.mkdir()
+    atomic_write(identity_file, json.dumps(identity, indent=1))
+    return done
+
+
+class Evaluator:
+    """``run(values)``: the records of a batch of designs, in order. New designs get the next
+    index; with ``budget``, designs past it are not run (None)."""
+
+    def __init__(
+        self,
+        spec: EvaluationSpec,
+        done: dict[str, dict],
+        *,
+        workers: int = 1,
+        comm=None,
+        on_record: OnRecord | None = None,
+    ) -> None:
+        self.spec, self.comm, self.on_record = spec, comm, on_record
+        self.resumed = dict(done)
+        self.records: dict[str, dict] = {}  # this study's designs, in the order asked for
+        self.evaluated = 0  # run in this invocation
+        self.reused = 0  # taken from an earlier, resumed invocation
+        self._taken = {r["index"] for r in done.values()}
+        self._index = 0
+        self.pool = None
+        if comm is None and workers > 1:
+            self.pool = futures.ProcessPoolExecutor(max_workers=workers)
+
+    def run(
+        self, batch: Sequence[dict], stage: str | Sequence[str] = "", budget: int | None = None
+    ) -> list[dict | None]:
+        """``stage``: one for the batch, or one per design."""
+        stages = [stage] * len(batch) if isinstance(stage, str) else list(stage)
+        new: list[Design] = []
+        for values, stage_of in zip(batch, stages, strict=True):
+            key = design_key(values)
+            if key in self.records:
+                continue
+            if budget is not None and len(self.records) >= budget:
+                continue
+            if key in self.resumed:
+                self.records[key] = {**self.resumed[key], "resumed": True}
+                self.reused += 1
+                continue
+            self.records[key] = {}  # reserved
+            new.append(Design(index=self._next_index(), values=dict(values), stage=stage_of))
+        for record in self._evaluate(new):
+            self.records[record["key"]] = record
+            self.evaluated += 1
+        return [self.records.get(design_key(v)) or None for v in batch]
+
+    def _next_index(self) -> int:
+        """The next folder number no earlier evaluation of this output holds."""
+        while self._index in self._taken:
+            self._index += 1
+        self._taken.add(self._index)
+        return self._index
+
+    def _evaluate(self, designs: list[Design]):
+        if not designs:
+            return
+        if self.comm is not None:
+            yield from self._mpi(designs)
+            return
+        if self.pool is None:
+            for d in designs:
+                record = evaluate(self.spec, d)
+                self._said(record)
+                yield record
+            return
+        jobs = [self.pool.submit(evaluate, self.spec, d) for d in designs]
+        for job in futures.as_completed(jobs):
+            record = job.result()
+            self._said(record)
+            yield record
+
+    def _mpi(self, designs: list[Design]):
+        comm = self.comm
+        comm.bcast(designs, root=0)
+        mine = []
+        for d in designs[0 :: comm.Get_size()]:
+            mine.append(evaluate(self.spec, d))
+            self._said(mine[-1])
+        for rank, part in enumerate(comm.gather(mine, root=0)):
+            for record in part:
+                if rank:  # rank 0's own were said as they finished
+                    self._said(record)
+                yield record
+
+    def _said(self, record: dict) -> None:
+        if self.on_record is not None:
+            self.on_record(record)
+
+    def all_records(self) -> list[dict]:
+        """Every design of the study, in the order the method asked for them."""
+        return [r for r in self.records.values() if r]
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+        if self.comm is not None:
+            self.comm.bcast(None, root=0)  # the other ranks' serve() returns
+
+
+def serve(comm, spec: EvaluationSpec) -> None:
+    """A rank other than 0: evaluate its share of each batch rank 0 deals, until None."""
+    rank, size = comm.Get_rank(), comm.Get_size()
+    while True:
+        designs = comm.bcast(None, root=0)
+        if designs is None:
+            return
+        comm.gather([evaluate(spec, d) for d in designs[rank::size]], root=0)
+
+
+def warn(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
