@@ -193,6 +193,16 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 f"actuation.{key} must lie within the MFC's range [{lo:g}, {hi:g}] V "
                 f"(Table 3.1), got {list(volts)}"
             )
+    if case.analysis.kind.value == "swimming":
+        if g.kind is not GeometryKind.FISH:
+            raise CaseError(
+                f'analysis.kind = "swimming" needs geometry.kind = "fish", got "{g.kind}"'
+            )
+        if case.boundary.head.value != "free":
+            raise CaseError(
+                f'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
+                f'held nowhere), got "{case.boundary.head.value}"'
+            )
     t = case.time
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")

@@ -49,6 +49,12 @@ class AnalysisKind(StrEnum):
     STATIC = "static"
     DYNAMIC = "dynamic"
     MODAL = "modal"
+    SWIMMING = "swimming"  # self-propelled speed and turning rate (fluid_adapter/swimming.py)
+
+
+class SkinFriction(StrEnum):
+    ITTC_1957 = "ittc-1957"  # 0.075 / (log10 Re - 2)^2, fully turbulent
+    BLASIUS = "blasius"  # 1.328 / sqrt(Re), laminar
 
 
 class Integrator(StrEnum):
@@ -415,8 +421,10 @@ class Analysis:
     kind: AnalysisKind = param(
         AnalysisKind.DYNAMIC,
         "static (load steps, Newton), dynamic "
-        "(implicit time integration, Newton each step) or modal (in "
-        'vacuum, or wet with fluid.model = "potential").',
+        "(implicit time integration, Newton each step), modal (in "
+        'vacuum, or wet with fluid.model = "potential") or swimming (self-propelled speed, '
+        "swimming number and turning rate of the free fish from its linear periodic response; "
+        'boundary.head = "free"; keys in [swimming], docs/swimming.md).',
     )
     load_steps: int = param(10, "static: number of load increments.", ge=1, le=10_000)
     num_modes: int = param(6, "modal: number of elastic modes reported.", ge=1, le=200)
@@ -683,6 +691,61 @@ class Output:
     )
 
 
+@dataclass(frozen=True, kw_only=True)
+class Swimming:
+    speed_m_s: float | None = param(
+        None,
+        "Forward speed at which thrust and drag are evaluated (a flume's inflow); unset: the "
+        "self-propelled speed, where the mean thrust equals the drag.",
+        unit="m/s",
+        ge=0,
+        le=20,
+    )
+    skin_friction: SkinFriction = param(
+        SkinFriction.ITTC_1957,
+        "Flat-plate skin-friction line of the wetted plate (both faces) at Re = V L / nu: "
+        "ittc-1957 (fully turbulent, ITTC 1957 correlation line) or blasius (laminar, "
+        "Schlichting eq. 7.34).",
+    )
+    head_weight_drag_coefficient: float = param(
+        0.63,
+        "Form drag of the steel head weight, seen from the front as a short circular cylinder "
+        "across the flow (diameter 2 r, length its thickness): C_D of a cylinder of "
+        "length/diameter 1 (White, Fluid Mechanics, Table 7.3), on the area 2 r x thickness.",
+        ge=0,
+        le=10,
+    )
+    float_drag_coefficient: float = param(
+        1.05,
+        "Form drag of the float on the robot's top (seed Sec. 4.1: blowing agent, size not "
+        "given), taken as a cube face-on (Hoerner, Fluid-Dynamic Drag, 1965, ch. 3).",
+        ge=0,
+        le=10,
+    )
+    float_density_kg_m3: float = param(
+        30.0,
+        "Density of the float's foam (low-density blowing agent; rigid PU foam 30-50).",
+        unit="kg/m^3",
+        ge=0,
+        le=1000,
+    )
+    float_volume_m3: float | None = param(
+        None,
+        "Float volume; unset: what makes the robot neutrally buoyant (the model's mass less "
+        "the liquid it displaces, over the liquid's density less the foam's).",
+        unit="m^3",
+        ge=0,
+        le=1e-3,
+    )
+    crossflow_drag_coefficient: float = param(
+        1.2,
+        "Turning: drag of the plate's sections moving sideways as the body rotates (a flat "
+        "plate normal to the flow, breadth/height 1-5: White, Fluid Mechanics, Table 7.3).",
+        ge=0,
+        le=10,
+    )
+
+
 SECTIONS: dict[str, type] = {
     "case": CaseInfo,
     "geometry": Geometry,
@@ -696,6 +759,7 @@ SECTIONS: dict[str, type] = {
     "fluid": Fluid,
     "coupling": Coupling,
     "output": Output,
+    "swimming": Swimming,
 }
 
 
@@ -716,6 +780,7 @@ class Case:
     fluid: Fluid = field(default_factory=Fluid)
     coupling: Coupling = field(default_factory=Coupling)
     output: Output = field(default_factory=Output)
+    swimming: Swimming = field(default_factory=Swimming)
 
     @property
     def name(self) -> str:

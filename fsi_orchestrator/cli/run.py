@@ -28,6 +28,7 @@ from .compose import (
     shell_with_fast_fluid,
 )
 from .modal import modal_summary
+from .swimming import swimming_summary
 
 
 def schedule_of(case: Case) -> Schedule:
@@ -355,6 +356,8 @@ def _body(args: argparse.Namespace) -> int:
         summary = modal_summary(case)
     elif kind is AnalysisKind.STATIC:
         summary = static_summary(case)
+    elif kind is AnalysisKind.SWIMMING:
+        summary = swimming_summary(case)
     else:
         try:  # before the set-up's seconds: a folder that cannot be written fails at once
             output.mkdir(parents=True, exist_ok=True)

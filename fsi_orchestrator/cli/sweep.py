@@ -36,9 +36,10 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, CaseError
-from ..case.schema import FluidModel, Waveform
+from ..case.schema import AnalysisKind, FluidModel, Waveform
 from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
 from .compose import shell_with_fast_fluid, without_cfd
+from .swimming import SWIMMING_KEYS
 
 SAMPLES_PER_PERIOD = 64
 MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
@@ -121,6 +122,11 @@ def linear_sweep(
     xs = model.mesh.nodes[midline, 0]
     half_height = model.layout.height(xs) / 2
     tip = model.mesh.nearest_node(*model.layout.tip_point)
+    swim = None
+    if case.analysis.kind is AnalysisKind.SWIMMING:  # speed and turning from each motion
+        from .swimming import swimming_model
+
+        swim = swimming_model(case, model, xs)
     rows = []
     for waveform, f in jobs:
         start = time.perf_counter()
@@ -150,7 +156,11 @@ def linear_sweep(
             "slender_body_mean_thrust_n": float(thrust),
             "status": "ok",
         }
-        row["status"] = not_finite_status(row, ("tip_amplitude_m", "slender_body_mean_thrust_n"))
+        checked = ["tip_amplitude_m", "slender_body_mean_thrust_n"]
+        if swim is not None and np.all(np.isfinite(h)):
+            row.update(swim.row(times, h, f))
+            checked += SWIMMING_KEYS
+        row["status"] = not_finite_status(row, checked)
         rows.append(row)
         if on_row is not None:
             on_row(point_name(waveform, f), row, time.perf_counter() - start)

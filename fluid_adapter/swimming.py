@@ -1,0 +1,244 @@
+"""Free swimming of the fish: self-propelled speed and turning rate (seed Sec. 4.4-4.5, 5.3-5.4).
+
+Frame and midline as in :mod:`fluid_adapter.slender_body`: x from the nose (0) to the tail (L),
+the fish swims toward -x at speed V, h(x, t) the lateral (z) displacement of the midline over
+whole periods, b(x) the half-height, A = rho pi b^2 gamma (eq. 5-3), w = h_t + V h_x (eq. 5-4).
+The motion is the free body's periodic response in still liquid (its recoil included), taken
+as unchanged by the forward speed.
+
+Speed. The mean thrust T(V) is Lighthill's elongated-body thrust at forward speed (eq. 5-12,
+:func:`fluid_adapter.slender_body.slender_body_thrust`); it falls with V because the tail's
+relative lateral velocity w shrinks. The drag
+
+    D(V) = 1/2 rho V^2 (C_f(Re) S_wet + sum_k C_D,k S_k),   Re = V L / nu,
+
+has the skin friction of the wetted plate (both faces, S_wet) on a flat-plate line and the
+form drag of the parts that stand out of the plate (head weight, float; frontal areas S_k,
+coefficients from the literature, see the case keys of [swimming]). The self-propelled speed
+V* solves T(V*) = D(V*) (scipy.optimize.brentq); T(0) > 0 and D grows as V^2 while T falls,
+so the root is unique.
+
+Skin friction lines: ITTC 1957, C_f = 0.075 / (log10 Re - 2)^2 (fully turbulent, the
+model-ship correlation line; held at its Re = 1e3 value below that), and Blasius' laminar plate,
+C_f = 1.328 / sqrt(Re) (Schlichting, Boundary-Layer Theory, eq. 7.34).
+
+Turning. The lateral force per length of the elongated body (eqs. 5-1, 5-2) is
+l = -D(A w)/Dt on growing sections, -A Dw/Dt where vorticity is shed (A' < 0) and
+-D(A w)/Dt + w* V A' on fin sections in the shed sheet. Over a period the d/dt parts vanish;
+integrated over the body (the blunt nose cancels as for the thrust):
+
+    F = -V A(L) <w>(L) + V int_{A'<0} <w> dA + V int_{fin} <w*> dA - A(L) <w^2 h_x>(L) / 2,
+    N = -V (L - x_r) A(L) <w>(L) + V int A <w> dx + V int_{A'<0} (x - x_r) <w> dA
+        + V int_{fin} (x - x_r) <w*> dA - (L - x_r) A(L) <w^2 h_x>(L) / 2,
+
+with N = int (x - x_r) l dx the yaw moment about x_r (the centre of mass). The last terms are
+the trailing edge's reactive force of Lighthill's large-amplitude theory (1971, Proc. R. Soc. B
+179, 125), A (w (u.tau) n - w^2/2 tau) with u.tau = -V for an inextensible tail: its x part is
+the thrust above, its z part tilts that thrust with the mean tail angle. A constant-height plate
+at incidence a gives F = -rho pi b^2 V^2 a, Jones' slender-wing lift.
+
+An asymmetric drive (one MFC with a larger mean voltage) bends the body on average; the body
+then sideslips by the angle beta (a rigid rotation of h, beta (x - x_r)) that makes the mean
+side force vanish, and the moment left turns it. Turning at the rate Omega about +y (positive:
+to the left, the +z side, seen from above with the nose forward) adds the lateral velocity
+-Omega (x - x_r) to w (Munk's yaw damping of the same theory) and the cross-flow drag
+-1/2 rho C_D,cross 2 b |w_r| w_r of the plate's sections (w_r = -Omega (x - x_r)). The turning
+rate solves N(beta(Omega), Omega) = 0. Left out: the centripetal force m V Omega (1 % of the
+side forces here) and the change of the motion with the turn.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.integrate import trapezoid
+from scipy.optimize import brentq
+
+from .slender_body import (
+    _shedding_points,
+    _stieltjes,
+    added_mass_per_length,
+    periodic_derivative,
+    slender_body_thrust,
+)
+
+SKIN_FRICTION_LINES = ("ittc-1957", "blasius")
+ITTC_MIN_REYNOLDS = 1e3  # the ITTC line diverges at Re = 100
+MAX_SPEED_M_S = 50.0  # no root below this: the motion or the drag is not physical
+MAX_SLIP_RAD = 0.5
+
+
+def skin_friction_coefficient(reynolds: float, line: str = "ittc-1957") -> float:
+    """Mean skin-friction coefficient of a flat plate at Re = V L / nu."""
+    if line not in SKIN_FRICTION_LINES:
+        raise ValueError(f"skin friction line must be one of {SKIN_FRICTION_LINES}, got {line!r}")
+    if not reynolds > 0:
+        raise ValueError(f"the Reynolds number must be > 0, got {reynolds}")
+    if line == "blasius":
+        return 1.328 / np.sqrt(reynolds)
+    return 0.075 / (np.log10(max(reynolds, ITTC_MIN_REYNOLDS)) - 2.0) ** 2
+
+
+@dataclass(frozen=True, kw_only=True)
+class FormDrag:
+    """A part standing out of the plate: frontal area (m^2) and drag coefficient."""
+
+    name: str
+    frontal_area_m2: float
+    drag_coefficient: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class BodyDrag:
+    """D(V) = 1/2 rho V^2 (C_f(Re) S_wet + sum C_D S)."""
+
+    density_kg_m3: float
+    kinematic_viscosity_m2_s: float
+    length_m: float
+    wetted_area_m2: float
+    skin_friction: str = "ittc-1957"
+    form: tuple[FormDrag, ...] = ()
+
+    def parts(self, speed_m_s: float) -> dict[str, float]:
+        """Each term of the drag (N) at ``speed_m_s``: skin friction, then the form drags."""
+        if speed_m_s == 0:
+            return {"skin_friction": 0.0, **{p.name: 0.0 for p in self.form}}
+        q = 0.5 * self.density_kg_m3 * speed_m_s**2
+        re = abs(speed_m_s) * self.length_m / self.kinematic_viscosity_m2_s
+        cf = skin_friction_coefficient(re, self.skin_friction)
+        return {
+            "skin_friction": q * cf * self.wetted_area_m2,
+            **{p.name: q * p.drag_coefficient * p.frontal_area_m2 for p in self.form},
+        }
+
+    def total(self, speed_m_s: float) -> float:
+        return float(sum(self.parts(speed_m_s).values()))
+
+
+def mean_thrust(
+    x: NDArray, half_height: NDArray, h: NDArray, dt_s: float, speed_m_s: float, **fluid
+) -> float:
+    """Lighthill's mean thrust (N) at forward speed ``speed_m_s`` (eq. 5-12)."""
+    return slender_body_thrust(x, half_height, h, dt_s, speed_m_s=speed_m_s, **fluid).mean_thrust_n
+
+
+def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:
+    """V* >= 0 with thrust(V*) = drag(V*); 0 when the motion gives no thrust at rest."""
+    if not thrust(0.0) > 0:
+        return 0.0
+    upper = 0.05
+    while thrust(upper) - drag(upper) > 0:
+        upper *= 2
+        if upper > MAX_SPEED_M_S:
+            raise ValueError(
+                f"the mean thrust exceeds the drag up to {MAX_SPEED_M_S:g} m/s: no "
+                "self-propelled speed (is the motion finite?)"
+            )
+    return brentq(lambda v: thrust(v) - drag(v), 0.0, upper, xtol=1e-14, rtol=1e-14, maxiter=200)
+
+
+@dataclass(frozen=True, kw_only=True)
+class YawLoad:
+    """Mean side force (N, +z) and yaw moment N = int (x - x_r) l dx (N m) over a period."""
+
+    side_force_n: float
+    yaw_moment_nm: float
+
+
+def side_force_and_moment(
+    x: NDArray,
+    half_height: NDArray,
+    h: NDArray,
+    dt_s: float,
+    *,
+    speed_m_s: float,
+    x_ref_m: float,
+    density_kg_m3: float,
+    added_mass_coefficient: float = 1.0,
+    slip_rad: float = 0.0,
+    yaw_rate_rad_s: float = 0.0,
+    crossflow_drag_coefficient: float = 0.0,
+) -> YawLoad:
+    """The mean side force and yaw moment of the module docstring, with the body slipped by
+    ``slip_rad`` and turning at ``yaw_rate_rad_s`` about +y through ``x_ref_m``."""
+    x, b, h = (np.asarray(v, dtype=float) for v in (x, half_height, h))
+    v = float(speed_m_s)
+    area = added_mass_per_length(b, density_kg_m3, added_mass_coefficient)
+    r = x - x_ref_m
+    w_turn = -yaw_rate_rad_s * r
+    h_x = np.gradient(h, x, axis=1, edge_order=2) + slip_rad
+    w = periodic_derivative(h, dt_s) + v * h_x + w_turn
+    w_mean = w.mean(axis=0)
+    w_star = _mean_sheet_velocity(x, b, w_mean) if v > 0 else np.zeros_like(x)
+    shrinking, growing = np.diff(area) < 0, np.diff(area) > 0
+
+    def stieltjes(f: NDArray, intervals: NDArray) -> float:
+        return float(_stieltjes(f[None, :], area, intervals)[0])
+
+    tilt = -area[-1] * np.mean(w[:, -1] ** 2 * h_x[:, -1]) / 2
+    force = (
+        -v * area[-1] * w_mean[-1]
+        + v * stieltjes(w_mean, shrinking)
+        + v * stieltjes(w_star, growing)
+        + tilt
+    )
+    moment = (
+        -v * r[-1] * area[-1] * w_mean[-1]
+        + v * trapezoid(area * w_mean, x)
+        + v * stieltjes(r * w_mean, shrinking)
+        + v * stieltjes(r * w_star, growing)
+        + r[-1] * tilt
+    )
+    cross = -0.5 * density_kg_m3 * crossflow_drag_coefficient * 2 * b * np.abs(w_turn) * w_turn
+    force += trapezoid(cross, x)
+    moment += trapezoid(r * cross, x)
+    return YawLoad(side_force_n=float(force), yaw_moment_nm=float(moment))
+
+
+def _mean_sheet_velocity(x: NDArray, b: NDArray, w_mean: NDArray) -> NDArray:
+    """<w*>: the mean of w where the sheet was shed (a time shift leaves a mean unchanged)."""
+    w_star = np.zeros_like(x)
+    for i, (_, j, frac) in _shedding_points(x, b).items():
+        w_star[i] = (1 - frac) * w_mean[j] + frac * w_mean[j + 1]
+    return w_star
+
+
+@dataclass(frozen=True, kw_only=True)
+class Turning:
+    yaw_rate_rad_s: float  # + to the left (+z side), about +y
+    slip_rad: float  # the sideslip that cancels the mean side force
+    drive_moment_nm: float  # N at Omega = 0 (after the slip): what turns the fish
+
+
+def turning_rate(x, half_height, h, dt_s, **load) -> Turning:
+    """The steady turning rate: N(beta(Omega), Omega) = 0, beta cancelling the side force.
+    ``load``: the keywords of :func:`side_force_and_moment` other than slip and yaw rate."""
+
+    def loads(slip: float, rate: float) -> YawLoad:
+        return side_force_and_moment(
+            x, half_height, h, dt_s, slip_rad=slip, yaw_rate_rad_s=rate, **load
+        )
+
+    def slip_of(rate: float) -> float:
+        f = lambda s: loads(s, rate).side_force_n  # noqa: E731
+        lo, hi = f(-MAX_SLIP_RAD), f(MAX_SLIP_RAD)
+        if not lo * hi < 0:  # no side force to cancel (at rest, no lift)
+            return 0.0
+        return brentq(f, -MAX_SLIP_RAD, MAX_SLIP_RAD, xtol=1e-12)
+
+    def moment(rate: float) -> float:
+        return loads(slip_of(rate), rate).yaw_moment_nm
+
+    drive = moment(0.0)
+    if drive == 0.0:
+        return Turning(yaw_rate_rad_s=0.0, slip_rad=slip_of(0.0), drive_moment_nm=0.0)
+    # the damping grows with Omega: bracket on the side that opposes the drive
+    step = -np.sign(drive) * 0.01
+    while moment(step) * drive > 0:
+        step *= 2
+        if abs(step) > 1e3:
+            raise ValueError("no yaw damping balances the drive's yaw moment")
+    rate = brentq(moment, 0.0, step, xtol=1e-12, rtol=1e-12)
+    return Turning(yaw_rate_rad_s=rate, slip_rad=slip_of(rate), drive_moment_nm=drive)

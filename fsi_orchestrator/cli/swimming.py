@@ -1,0 +1,174 @@
+"""Swimming figures of a case (``analysis.kind = "swimming"``): self-propelled speed, body
+lengths per second, swimming number Sw = V / (f L) (seed eq. 5-15) and turning rate.
+
+The motion is the free fish's linear periodic response about the mean-voltage equilibrium,
+as ``fsi-sweep --method linear`` computes it (its recoil included: the head is free); the
+thrust, drag and yaw balance are :mod:`fluid_adapter.swimming`'s. ``fsi-run`` prints one
+drive's figures; ``fsi-sweep`` adds them to each frequency's row. docs/swimming.md.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..case import Case
+from .compose import without_cfd
+
+# the contract of fsi-run --json for a swimming case, and fsi-sweep's extra columns
+SWIMMING_KEYS = (
+    "swimming_speed_m_s",
+    "body_lengths_per_s",
+    "swimming_number",
+    "turning_rate_deg_s",
+)
+SLIP_ITERATIONS = 2  # speed with the sideslip of the turn, and again: a change < 1e-6 here
+
+
+@dataclass(frozen=True, kw_only=True)
+class SwimmingModel:
+    """What the swimming figures need of one fish: its midline, centre of mass and drag."""
+
+    x_m: NDArray
+    half_height_m: NDArray
+    x_ref_m: float  # centre of mass: the turning axis
+    body_length_m: float
+    drag: object  # fluid_adapter.swimming.BodyDrag
+    density_kg_m3: float
+    added_mass_coefficient: float
+    crossflow_drag_coefficient: float
+    prescribed_speed_m_s: float | None
+
+    def row(self, times: NDArray, h: NDArray, frequency_hz: float) -> dict:
+        """The swimming columns of one drive from the midline history ``h`` (len(times), n_x)
+        sampled at ``times`` over one period (the end point may repeat the start)."""
+        from fluid_adapter.swimming import mean_thrust, self_propelled_speed, turning_rate
+
+        dt = float(times[1] - times[0])
+        h = np.asarray(h)[-round(1 / (frequency_hz * dt)) :]
+        x, b, r = self.x_m, self.half_height_m, self.x_m - self.x_ref_m
+        fluid = {
+            "density_kg_m3": self.density_kg_m3,
+            "added_mass_coefficient": self.added_mass_coefficient,
+        }
+
+        def speed_with(slip: float) -> tuple[float, float]:
+            h_body = h + slip * r
+            thrust = lambda v: mean_thrust(x, b, h_body, dt, v, **fluid)  # noqa: E731
+            speed = self.prescribed_speed_m_s
+            if speed is None:
+                speed = self_propelled_speed(thrust, self.drag.total)
+            return speed, thrust(speed)
+
+        slip, speed, thrust, turn = 0.0, 0.0, 0.0, None
+        for _ in range(SLIP_ITERATIONS):
+            speed, thrust = speed_with(slip)
+            turn = turning_rate(
+                x,
+                b,
+                h,
+                dt,
+                speed_m_s=speed,
+                x_ref_m=self.x_ref_m,
+                crossflow_drag_coefficient=self.crossflow_drag_coefficient,
+                **fluid,
+            )
+            slip = turn.slip_rad
+        drag = self.drag.parts(speed)
+        length = self.body_length_m
+        return {
+            "swimming_speed_m_s": speed,
+            "body_lengths_per_s": speed / length,
+            "swimming_number": speed / (frequency_hz * length),
+            "turning_rate_deg_s": float(np.degrees(turn.yaw_rate_rad_s)),
+            "thrust_at_speed_n": thrust,
+            "drag_at_speed_n": float(sum(drag.values())),
+            **{f"{name}_drag_n": value for name, value in drag.items()},
+            "reynolds_number": speed * length / self.drag.kinematic_viscosity_m2_s,
+            "slip_deg": float(np.degrees(turn.slip_rad)),
+            "yaw_drive_moment_nm": turn.drive_moment_nm,
+        }
+
+
+def swimming_model(case: Case, model, x_m: NDArray) -> SwimmingModel:
+    """The case's swimming model on the shell ``model``'s midline nodes ``x_m``."""
+    from fluid_adapter.swimming import BodyDrag, FormDrag
+    from solid_adapter.geometry import resolve_fish
+
+    s, fluid = case.swimming, case.fluid
+    mass, x_cm, volume = _mass_and_volume(model)
+    float_volume = s.float_volume_m3
+    if float_volume is None:  # neutral buoyancy: the float carries what the liquid does not
+        excess = mass - fluid.density_kg_m3 * volume
+        float_volume = max(excess, 0.0) / (fluid.density_kg_m3 - s.float_density_kg_m3)
+    p = resolve_fish(case)
+    form = (
+        FormDrag(
+            name="head_weight",
+            frontal_area_m2=2 * p.head_weight_radius_m * p.head_weight_thickness_m,
+            drag_coefficient=s.head_weight_drag_coefficient,
+        ),
+        FormDrag(
+            name="float",
+            frontal_area_m2=float_volume ** (2 / 3),  # a cube face-on
+            drag_coefficient=s.float_drag_coefficient,
+        ),
+    )
+    planform = float(model.area_matrix.sum())
+    drag = BodyDrag(
+        density_kg_m3=fluid.density_kg_m3,
+        kinematic_viscosity_m2_s=fluid.kinematic_viscosity_m2_s,
+        length_m=model.layout.length_m,
+        wetted_area_m2=2 * planform,
+        skin_friction=s.skin_friction.value,
+        form=form,
+    )
+    return SwimmingModel(
+        x_m=x_m,
+        half_height_m=model.layout.height(x_m) / 2,
+        x_ref_m=x_cm,
+        body_length_m=model.layout.length_m,
+        drag=drag,
+        density_kg_m3=fluid.density_kg_m3,
+        added_mass_coefficient=fluid.added_mass_coefficient,
+        crossflow_drag_coefficient=s.crossflow_drag_coefficient,
+        prescribed_speed_m_s=s.speed_m_s,
+    )
+
+
+def _mass_and_volume(model) -> tuple[float, float, float]:
+    """The plate's mass (kg), the x of its centre of mass (m) and its volume (m^3), from the
+    laminate of each region (head weight and MFCs included)."""
+    quad = model.mesh.dense
+    pts, weights = quad.points, quad.weights
+    sections = model.layout.sections
+    codes = model.layout.region(pts[..., 0], pts[..., 1])
+    rho = np.array([sec.rho[0] for sec in sections])[codes]
+    thickness = np.array(
+        [max(ly.z1_m for ly in sec.layers) - min(ly.z0_m for ly in sec.layers) for sec in sections]
+    )[codes]
+    mass = float(np.sum(rho * weights))
+    return (
+        mass,
+        float(np.sum(rho * weights * pts[..., 0]) / mass),
+        float(np.sum(thickness * weights)),
+    )
+
+
+def swimming_summary(case: Case) -> dict:
+    """fsi-run's summary of a swimming case: the figures of the case's own drive."""
+    from .sweep import SweepError, linear_sweep
+
+    start = time.perf_counter()
+    a = case.actuation
+    rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
+    row = rows[0]
+    if row["status"] != "ok":
+        raise SweepError(f"swimming: {row['status']}")
+    summary = {k: row[k] for k in SWIMMING_KEYS}
+    summary.update({k: v for k, v in row.items() if k not in summary and k != "status"})
+    summary["wall_s"] = time.perf_counter() - start
+    return summary
