@@ -1,0 +1,176 @@
+"""fsi-design: study files, bad input in one line, the linear evaluation against fsi-sweep's,
+infeasible designs, --resume, the best case and --json (the beam in liquid, coarse, linear:
+a few seconds per design)."""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import shutil
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from fsi_orchestrator.case import load_case
+from fsi_orchestrator.case.schema import Waveform
+from fsi_orchestrator.cli import design as design_cli
+from fsi_orchestrator.cli.sweep import linear_sweep
+from fsi_orchestrator.design.study import parse_constraint
+
+ROOT = Path(__file__).resolve().parents[1]
+BEAM = ROOT / "cases/beam_in_liquid"
+
+# three drive frequencies, 2, 4 and 6 Hz; the constraint leaves 6 Hz infeasible
+STUDY = f"""
+[base]
+case = "{BEAM}"
+overrides = ["mesh.level=coarse"]
+
+[[parameters]]
+key = "actuation.frequency_hz"
+low = 2.0
+high = 6.0
+
+[[constraints]]
+expression = "actuation.frequency_hz <= 5"
+
+[objective]
+quantity = "tip_amplitude_m"
+sense = "max"
+
+[method]
+kind = "one-at-a-time"
+points = 3
+"""
+
+
+def write_study(folder: Path, text: str) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "study.toml").write_text(text)
+    return folder
+
+
+def run_json(capsys, *argv: str) -> dict:
+    assert design_cli.main([*argv, "--json", "--quiet"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """The study above, run once (in-process, one worker)."""
+    folder = write_study(tmp_path_factory.mktemp("design") / "study", STUDY)
+    out = folder / "output"
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):
+        code = design_cli.main([str(folder), "--json", "--quiet"])
+    assert code == 0
+    return folder, out, json.loads(text.getvalue())
+
+
+def rows_of(out: Path) -> list[dict]:
+    with open(out / "evaluations.csv") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_one_at_a_time_records_every_design_and_the_best_is_the_tables_max(finished):
+    _, out, summary = finished
+    rows = rows_of(out)
+    assert [float(r["actuation.frequency_hz"]) for r in rows] == [2.0, 4.0, 6.0]
+    assert [r["status"] for r in rows] == ["ok", "ok", "infeasible"]
+    assert "actuation.frequency_hz <= 5" in rows[2]["reason"]
+    ok = [r for r in rows if r["status"] == "ok"]
+    best = max(ok, key=lambda r: float(r["tip_amplitude_m"]))
+    assert summary["best"]["objective"] == pytest.approx(float(best["tip_amplitude_m"]), rel=1e-15)
+    assert summary["best"]["parameters"] == {
+        "actuation.frequency_hz": float(best["actuation.frequency_hz"])
+    }
+    assert (summary["evaluations"], summary["ok"], summary["infeasible"]) == (3, 2, 1)
+    assert {r["fidelity_method"] for r in ok} == {"linear"}
+    with h5py.File(out / "evaluations.h5") as h5:
+        np.testing.assert_array_equal(h5["parameters"][:, 0], [2.0, 4.0, 6.0])
+        assert [s.decode() for s in h5["status"][:]] == ["ok", "ok", "infeasible"]
+    for name in ("response.png", "history.png"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_the_linear_evaluation_is_fsi_sweeps_linear_response(finished):
+    """Reference: fsi-sweep --method linear (linear_sweep) on the same case at 2 and 4 Hz."""
+    _, out, _ = finished
+    case = load_case(BEAM, ["mesh.level=coarse"])
+    sweep = linear_sweep(case, [2.0, 4.0], [Waveform.SINE])
+    rows = rows_of(out)[:2]
+    for row, point in zip(rows, sweep, strict=True):
+        assert float(row["tip_amplitude_m"]) == pytest.approx(point["tip_amplitude_m"], abs=1e-9)
+        summary = json.loads((out / "evaluations" / row["folder"] / "summary.json").read_text())
+        assert summary["summary"]["mean_thrust_n"] == point["slender_body_mean_thrust_n"]
+
+
+def test_the_best_case_is_a_case_folder_with_the_best_values(finished):
+    _, out, summary = finished
+    case = load_case(out / "best_case")
+    assert case.actuation.frequency_hz == summary["best"]["parameters"]["actuation.frequency_hz"]
+    assert case.mesh.level.value == "coarse"
+    base = load_case(BEAM)
+    assert case.fluid == base.fluid and case.geometry == base.geometry
+
+
+def test_resume_skips_finished_evaluations_and_runs_only_new_designs(finished, tmp_path, capsys):
+    folder, out, first = finished
+    study = write_study(tmp_path / "study", STUDY.replace("points = 3", "points = 5"))
+    shutil.copytree(out, tmp_path / "out")
+    # same study file, another `points`: the finished designs (2, 4, 6 Hz) are reused
+    again = run_json(capsys, str(study), "--output", str(tmp_path / "out"), "--resume")
+    assert (again["evaluations"], again["resumed"], again["evaluated_now"]) == (5, 3, 2)
+    rows = rows_of(tmp_path / "out")
+    assert sorted(float(r["actuation.frequency_hz"]) for r in rows) == [2, 3, 4, 5, 6]
+    assert again["best"]["objective"] >= first["best"]["objective"]
+
+
+def test_resume_refuses_the_output_of_another_study(finished, tmp_path, capsys):
+    _, out, _ = finished
+    other = write_study(tmp_path / "other", STUDY.replace('sense = "max"', 'sense = "min"'))
+    code = design_cli.main([str(other), "--output", str(out), "--resume"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "another study" in err[0]
+
+
+@pytest.mark.parametrize(
+    ("change", "named"),
+    [
+        (("actuation.frequency_hz", "geometry.kind"), "not a numeric case key"),
+        (("actuation.frequency_hz", "actuation.frequency"), "not a case key"),
+        (("low = 2.0", "low = -1.0"), "outside the key's valid range"),
+        (("high = 6.0", "high = 2000.0"), "outside the key's valid range"),
+        (('quantity = "tip_amplitude_m"', 'quantity = "tip_amplitude"'), "'tip_amplitude'"),
+        (('sense = "max"', 'sense = "up"'), "objective sense"),
+        (('kind = "one-at-a-time"', 'kind = "grid"'), "method.kind"),
+        (("<= 5", "<= __import__"), "[[constraints]]"),
+    ],
+)
+def test_bad_input_is_one_line_naming_it(tmp_path, capsys, change, named):
+    study = write_study(tmp_path / "bad", STUDY.replace(*change))
+    code = design_cli.main([str(study), "--output", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and named in err[0], err
+
+
+def test_a_study_whose_designs_are_all_infeasible_stops_in_one_line(tmp_path, capsys):
+    study = write_study(tmp_path / "none", STUDY.replace("<= 5", ">= 100"))
+    code = design_cli.main([str(study), "--output", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "all 3 designs are infeasible" in err[0]
+    assert [r["status"] for r in rows_of(tmp_path / "out")] == ["infeasible"] * 3
+
+
+def test_constraints_are_parsed_not_evaluated():
+    c = parse_constraint("geometry.peduncle_height_m + 0.001 <= 0.5 * geometry.max_height_m")
+    values = {"geometry.peduncle_height_m": 0.02, "geometry.max_height_m": 0.05}
+    assert c.holds(values.__getitem__) == (True, pytest.approx(0.021), pytest.approx(0.025))
+    values["geometry.peduncle_height_m"] = 0.03
+    assert not c.holds(values.__getitem__)[0]
