@@ -9,26 +9,36 @@ from collections.abc import Sequence
 
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import shell_with_fast_fluid, without_cfd
+from .progress import RunProgress
 
 
-def modal_summary(case) -> dict:
+def modal_summary(case, progress: RunProgress | None = None) -> dict:
     from solid_adapter.buckling import buckling_factor
     from solid_adapter.build import has_actuators
     from solid_adapter.piezo import DriveSignal
     from solid_adapter.solvers import modal_analysis, mode_kind
 
+    progress = progress or RunProgress(enabled=False)
     start = time.perf_counter()
     case = without_cfd(case)
-    model, added = shell_with_fast_fluid(case)
+    wet_part = (
+        "" if case.fluid.model.value == "none" else f" and {case.fluid.model.value} added mass"
+    )
+    with progress.phase(f"set-up: structure{wet_part}"):
+        model, added = shell_with_fast_fluid(case)
     n = case.analysis.num_modes
 
     def modes(result) -> tuple[list[float], list[str]]:
         return (result.frequencies_hz.tolist(), [mode_kind(model, s) for s in result.shapes])
 
-    wet = modal_analysis(model, n) if added is not None else None
+    wet = None
+    if added is not None:
+        with progress.phase(f"wet modes ({n})"):
+            wet = modal_analysis(model, n)
     model.set_added_mass(None)
     summary: dict = {}
-    summary["dry_hz"], summary["dry_kinds"] = modes(modal_analysis(model, n))
+    with progress.phase(f"dry modes ({n})"):
+        summary["dry_hz"], summary["dry_kinds"] = modes(modal_analysis(model, n))
     if wet is not None:
         summary["wet_hz"], summary["wet_kinds"] = modes(wet)
         summary["added_mass_kg"] = added.total()
@@ -37,19 +47,21 @@ def modal_summary(case) -> dict:
     if has_actuators(case):
         # the load factor at which the drive's mean voltage buckles the flat plate (> 1: held)
         # (null: the mean prestress does not buckle it at any factor)
-        factor = buckling_factor(model, DriveSignal.from_case(case).mean)
+        with progress.phase("mean-voltage buckling factor"):
+            factor = buckling_factor(model, DriveSignal.from_case(case).mean)
         summary["mean_voltage_buckling_factor"] = factor if factor < float("inf") else None
     summary["wall_s"] = time.perf_counter() - start
     return summary
 
 
 def _body(args: argparse.Namespace) -> int:
-    emit(modal_summary(load(args)), args.json)
+    emit(modal_summary(load(args), RunProgress(enabled=not args.quiet)), args.json)
     return EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-modal", "Mode frequencies of the plate (dry; wet with a fluid).")
+    parser.add_argument("--quiet", action="store_true", help="no progress lines")
     return run_main(_body, parser, argv)
 
 
