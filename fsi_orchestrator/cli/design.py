@@ -162,6 +162,8 @@ def _design(args: argparse.Namespace) -> int:
         workers=args.workers,
         comm=comm,
         on_record=lambda r: say(progress_line(r, study)),
+        # the tables after every batch: a killed study's are never older than a batch
+        on_batch=lambda: write_tables(evaluator.all_records(), study, output),
     )
     size = comm.Get_size() if comm is not None else args.workers
     say(

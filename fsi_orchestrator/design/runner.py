@@ -77,8 +77,9 @@ class Evaluator:
         workers: int = 1,
         comm=None,
         on_record: OnRecord | None = None,
+        on_batch: Callable[[], None] | None = None,
     ) -> None:
-        self.spec, self.comm, self.on_record = spec, comm, on_record
+        self.spec, self.comm, self.on_record, self.on_batch = spec, comm, on_record, on_batch
         self.resumed = dict(done)
         self.records: dict[str, dict] = {}  # this study's designs, in the order asked for
         self.evaluated = 0  # run in this invocation
@@ -110,6 +111,8 @@ class Evaluator:
         for record in self._evaluate(new):
             self.records[record["key"]] = record
             self.evaluated += 1
+        if new and self.on_batch is not None:
+            self.on_batch()
         return [self.records.get(design_key(v)) or None for v in batch]
 
     def _next_index(self) -> int:
