@@ -44,11 +44,11 @@ def progress_line(record: dict, study: Study) -> str:
     shown = ", ".join(f"{k.partition('.')[2]}={v:.4g}" for k, v in record["parameters"].items())
     if is_ok(record):
         result = ", ".join(f"{q} = {v:.5g}" for q, v in record["objectives"].items())
-        how = record["fidelity"].get("method", "")
+        how = f"{record['fidelity'].get('method', '')}, "
     else:
         result, how = f"{record['status']}: {record['reason']}", ""
     wall = record["wall_s"]
-    return f"design {record['index']:04d} [{shown or 'base'}]: {result} ({how} {wall:.1f} s)"
+    return f"design {record['index']:04d} [{shown or 'base'}]: {result} ({how}{wall:.1f} s)"
 
 
 def study_summary(study: Study, evaluator: Evaluator, output: Path, wall_s: float) -> dict:
