@@ -174,3 +174,42 @@ def test_constraints_are_parsed_not_evaluated():
     assert c.holds(values.__getitem__) == (True, pytest.approx(0.021), pytest.approx(0.025))
     values["geometry.peduncle_height_m"] = 0.03
     assert not c.holds(values.__getitem__)[0]
+
+
+def test_optimize_keeps_its_budget_and_improves_on_its_space_filling_start(tmp_path, monkeypatch):
+    """Differential evolution on a closed-form score (the evaluation replaced by a quadratic
+    with its maximum at 4.4 Hz, 0.3 mm): at most `budget` designs, none twice, and a best
+    closer to the maximum than the best of the Sobol start."""
+    from fsi_orchestrator.design import methods, runner
+    from fsi_orchestrator.design.evaluate import EvaluationSpec, design_key
+    from fsi_orchestrator.design.study import load_study
+
+    text = STUDY.replace("points = 3", "budget = 60\ninitial = 12").replace(
+        '"one-at-a-time"', '"optimize"'
+    )
+    text += '\n[[parameters]]\nkey = "geometry.thickness_m"\nlow = 0.0001\nhigh = 0.0004\n'
+    study = load_study(write_study(tmp_path / "opt", text))
+
+    def quadratic(spec, design):
+        f, t = design.values["actuation.frequency_hz"], design.values["geometry.thickness_m"]
+        score = -(((f - 4.4) / 4) ** 2) - ((t - 0.3e-3) / 3e-4) ** 2
+        return {
+            "index": design.index,
+            "key": design_key(design.values),
+            "stage": design.stage,
+            "parameters": design.values,
+            "status": "ok",
+            "objectives": {"tip_amplitude_m": score},
+            "score": score,
+        }
+
+    monkeypatch.setattr(runner, "evaluate", quadratic)
+    evaluator = runner.Evaluator(EvaluationSpec.of(study, tmp_path / "out"), {})
+    methods.run_method(study, evaluator)
+    records = evaluator.all_records()
+    assert 12 < len(records) <= 60
+    assert len({r["key"] for r in records}) == len(records)
+    assert [r["index"] for r in records] == list(range(len(records)))
+    start = max(r["score"] for r in records if r["stage"] == "initial")
+    assert sum(r["stage"] == "initial" for r in records) == 12
+    assert methods.best_of(records)["score"] > start
