@@ -149,10 +149,17 @@ def test_resume_refuses_the_output_of_another_study(finished, tmp_path, capsys):
         (('sense = "max"', 'sense = "up"'), "objective sense"),
         (('kind = "one-at-a-time"', 'kind = "grid"'), "method.kind"),
         (("<= 5", "<= __import__"), "[[constraints]]"),
+        (
+            ("points = 3", 'points = 3\nevaluation = "linear"', "tip_amplitude_m", "tip_max_abs_m"),
+            "method.evaluation",
+        ),
     ],
 )
 def test_bad_input_is_one_line_naming_it(tmp_path, capsys, change, named):
-    study = write_study(tmp_path / "bad", STUDY.replace(*change))
+    text = STUDY
+    for old, new in zip(change[::2], change[1::2], strict=True):
+        text = text.replace(old, new)
+    study = write_study(tmp_path / "bad", text)
     code = design_cli.main([str(study), "--output", str(tmp_path / "out")])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2

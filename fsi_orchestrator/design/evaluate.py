@@ -32,12 +32,18 @@ import numpy as np
 from ..case import Case, CaseError
 from ..case.loader import CASE_FILE, case_from_dict, merge_overrides
 from ..case.schema import AnalysisKind, FluidModel, GeometryKind
-from .study import _INDEXED, Constraint, Evaluation, Objective, Study
-
-LINEAR_KEYS = frozenset({"tip_amplitude_m", "mean_thrust_n", "slender_body_mean_thrust_n"})
-MODAL_KEYS = frozenset(
-    {"dry_hz", "wet_hz", "added_mass_kg", "plate_mass_kg", "mean_voltage_buckling_factor"}
+from .study import (
+    _INDEXED,
+    LINEAR_QUANTITIES,
+    MODAL_QUANTITIES,
+    Constraint,
+    Evaluation,
+    Objective,
+    Study,
 )
+
+LINEAR_KEYS = frozenset(LINEAR_QUANTITIES)
+MODAL_KEYS = frozenset({*MODAL_QUANTITIES, "mean_voltage_buckling_factor"})
 SUMMARY_FILE = "summary.json"
 OK, INFEASIBLE, FAILED = "ok", "infeasible", "failed"
 

@@ -445,6 +445,9 @@ def load_study(directory: str | Path) -> Study:
         ):
             _fail(f"[[constraints]] #{i + 1}", 'must be a table with expression = "a <= b"')
         parsed.append(parse_constraint(c["expression"]))
+    method = _method(raw)
+    if method.evaluation is Evaluation.LINEAR:
+        _check_linear(objectives)
     study = Study(
         directory=directory,
         base_case=(directory / base["case"]).resolve(),
@@ -452,11 +455,28 @@ def load_study(directory: str | Path) -> Study:
         parameters=params,
         objectives=objectives,
         constraints=tuple(parsed),
-        method=_method(raw),
+        method=method,
         title=str(info.get("title", "")),
     )
     check_base(study)
     return study
+
+
+# what the linear periodic response (and the modal path beside it) gives
+LINEAR_QUANTITIES = ("tip_amplitude_m", "mean_thrust_n", "slender_body_mean_thrust_n")
+MODAL_QUANTITIES = ("dry_hz", "wet_hz", "added_mass_kg", "plate_mass_kg")
+
+
+def _check_linear(objectives: tuple[Objective, ...]) -> None:
+    for o in objectives:
+        match = _INDEXED.match(o.quantity)
+        name = match.group(1) if match else o.quantity
+        if name not in (*LINEAR_QUANTITIES, *MODAL_QUANTITIES, "mean_voltage_buckling_factor"):
+            _fail(
+                "method.evaluation",
+                f'= "linear" cannot give {o.quantity!r} (it gives '
+                f'{", ".join(LINEAR_QUANTITIES)} and the modal keys); use "auto" or "transient"',
+            )
 
 
 def check_base(study: Study) -> None:
