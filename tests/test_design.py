@@ -220,3 +220,38 @@ def test_optimize_keeps_its_budget_and_improves_on_its_space_filling_start(tmp_p
     start = max(r["score"] for r in records if r["stage"] == "initial")
     assert sum(r["stage"] == "initial" for r in records) == 12
     assert methods.best_of(records)["score"] > start
+
+
+def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_holds(
+    finished, tmp_path, capsys, monkeypatch
+):
+    """The OpenFOAM runs replaced by a record whose score reverses the fast ranking: the
+    reruns get fluid.model = openfoam at the coarse level, by time march, best first."""
+    from fsi_orchestrator.design.evaluate import design_key
+
+    folder, out, _ = finished
+    shutil.copytree(out, tmp_path / "out")
+    asked = []
+
+    def openfoam(spec, design):
+        asked.append((spec.overrides[-2:], spec.evaluation.value, design.values))
+        score = design.values["actuation.frequency_hz"]  # the lower frequency ranks first
+        return {
+            "key": design_key(design.values),
+            "status": "ok",
+            "score": -score,
+            "objectives": {"tip_amplitude_m": -score},
+        }
+
+    monkeypatch.setattr(design_cli, "evaluate", openfoam)
+    summary = run_json(
+        capsys, str(folder), "--output", str(tmp_path / "out"), "--resume", "--confirm", "2"
+    )
+    assert summary["evaluated_now"] == 0
+    assert [a[:2] for a in asked] == [
+        (("fluid.model=openfoam", "fluid.mesh_level=coarse"), "transient")
+    ] * 2
+    fast_order = [a[2]["actuation.frequency_hz"] for a in asked]
+    assert fast_order[0] == summary["best"]["parameters"]["actuation.frequency_hz"]
+    assert summary["confirm"]["ranking_holds"] is (fast_order[0] < fast_order[1])
+    assert json.loads((tmp_path / "out" / "confirm.json").read_text())["designs"]
