@@ -51,6 +51,9 @@ class EdgeDrag:
     coefficients: NDArray  # k_i (N (s/m)^(1+p))
     exponent: float  # p = 1 - q
     omega: float  # rad/s, the drive's
+    # linearize on every harmonic's velocity (rms, as an equivalent sine) instead of the
+    # fundamental's: a square wave's harmonics ring the fin at its own modes
+    all_harmonics: bool = False
 
     amplitude_dependent = True
 
@@ -71,8 +74,8 @@ class EdgeDrag:
         None: no motion yet, no damping)."""
         c = np.zeros(model.ndof)
         if orbit is not None:
-            k, X = orbit.harmonics[0]
-            velocity = np.abs(k * orbit.omega * X[2::NDOF])
+            parts = orbit.harmonics if self.all_harmonics else orbit.harmonics[:1]
+            velocity = np.sqrt(sum(np.abs(k * orbit.omega * X[2::NDOF]) ** 2 for k, X in parts))
             c[2::NDOF] = (
                 harmonic_balance_factor(self.exponent) * self.coefficients * velocity**self.exponent
             )
@@ -85,10 +88,13 @@ def edge_drag(
     frequency_hz: float,
     c0: float = DRAG_C0,
     q: float = DRAG_Q,
+    all_harmonics: bool = False,
 ) -> EdgeDrag:
     """The drag law on a shell model's nodes (lumped nodal areas, local plate height)."""
     omega = 2 * np.pi * frequency_hz
     area = np.asarray(model.area_matrix.sum(axis=1)).ravel()
     height = model.layout.height(model.mesh.nodes[:, 0])
     kappa = 0.5 * density_kg_m3 * c0 * (omega * height / (2 * np.pi)) ** q
-    return EdgeDrag(coefficients=kappa * area, exponent=1.0 - q, omega=omega)
+    return EdgeDrag(
+        coefficients=kappa * area, exponent=1.0 - q, omega=omega, all_harmonics=all_harmonics
+    )
