@@ -61,6 +61,7 @@ def prepare_output(output: Path, identity: dict, resume: bool) -> dict[str, dict
     else:
         shutil.rmtree(evaluations)
         evaluations.mkdir()
+        shutil.rmtree(output / "best_case", ignore_errors=True)  # an earlier study's
     atomic_write(identity_file, json.dumps(identity, indent=1))
     return done
 
