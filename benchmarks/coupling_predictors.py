@@ -38,7 +38,7 @@ def fsi_run_per_period(out: Path, *settings: str) -> dict:
     the mean fluid solves per window, the median predictor miss and the median contraction of
     the first quasi-Newton update (predictor miss over the second residual)."""
     command = [str(Path(sys.executable).with_name("fsi-run")), str(CASE), "--output", str(out)]
-    command += ["--json", "--quiet"]
+    command += ["--json", "--quiet", "--overwrite"]  # a rerun of the benchmark replaces it
     for setting in settings:
         command += ["--set", setting]
     env = {**os.environ, "HDF5_USE_FILE_LOCKING": "FALSE"}

@@ -17,15 +17,19 @@ import numpy as np
 
 from .coupling import Coupling
 from .participant import DISPLACEMENT, Participant
+from .provenance import IDENTITY_ATTR, identity_changes
 from .results import (
     CHECKPOINT_FILE,
     RESULTS_FILE,
+    CorruptFile,
     PvdSeries,
     ResultsFile,
     VtkSeries,
+    is_write_fault,
     read_checkpoint,
     stored_rows,
     write_checkpoint,
+    write_failure,
 )
 
 
@@ -48,6 +52,8 @@ class OutputSettings:
     # windows between a fluid's flow fields (participants with ``flow_fields()``); 0: none
     flow_every: int = 0
     attributes: dict = field(default_factory=dict)
+    # the case's identity (provenance.case_identity): a checkpoint of another case is refused
+    case_identity: str | None = None
 
 
 ProgressFn = Callable[[int, int], None]
@@ -95,7 +101,10 @@ class WindowLoop:
         if resume:
             self._resume(out / CHECKPOINT_FILE)
             _check_results_reach(out / RESULTS_FILE, self.window)
-        results = ResultsFile(out / RESULTS_FILE, resume_rows=self.window if resume else None)
+        try:
+            results = ResultsFile(out / RESULTS_FILE, resume_rows=self.window if resume else None)
+        except (OSError, KeyError, ValueError) as err:  # checked above; e.g. another writer
+            raise ResumeError(_unreadable_results(out / RESULTS_FILE, err)) from None
         results.set_attributes(self.output.attributes)
         vtk = self._vtk_writers(out / "vtk", keep_until=self.solid.time if resume else None)
         self._flow_keep_until = self.solid.time if resume else None
@@ -115,6 +124,12 @@ class WindowLoop:
                 ):
                     self._checkpoint(out / CHECKPOINT_FILE)
                 self.progress(self.window, self.schedule.n_windows)
+        except OSError as err:  # a VTU, PVD or flow file that could not be written
+            if not is_write_fault(err):
+                raise
+            where = Path(err.filename) if err.filename else out
+            kept = f"the results up to window {results.rows} and the last checkpoint are kept"
+            raise write_failure(where, err, kept) from None
         finally:
             results.close()
         return out / RESULTS_FILE
@@ -183,21 +198,45 @@ class WindowLoop:
         loop_state: dict = {"window": self.window, "dt_s": self.schedule.dt}
         if self.coupling is not None:
             loop_state["coupling"] = self.coupling.save_state()
-        write_checkpoint(path, loop_state, {self.solid.name: self.solid.save_state()})
+        identity = self.output.case_identity
+        attributes = {IDENTITY_ATTR: identity} if identity is not None else {}
+        write_checkpoint(path, loop_state, {self.solid.name: self.solid.save_state()}, attributes)
 
     def _resume(self, path: Path) -> None:
-        self.window = load_checkpoint(path, self.solid, self.coupling, self.schedule.dt)
+        self.window = load_checkpoint(
+            path, self.solid, self.coupling, self.schedule.dt, self.output.case_identity
+        )
 
 
 def load_checkpoint(
-    path: Path, solid: Participant, coupling: Coupling | None, dt: float | None = None
+    path: Path,
+    solid: Participant,
+    coupling: Coupling | None,
+    dt: float | None = None,
+    identity: str | None = None,
 ) -> int:
     """Restore the structure and the coupling (with its fluid) from a checkpoint written
-    with windows of ``dt`` (None: any); returns the number of windows it had done."""
+    with windows of ``dt`` (None: any) for the case of ``identity`` (None: any); returns the
+    number of windows it had done."""
     if not path.exists():
         raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
-    loop_state, states = read_checkpoint(path)
+    try:
+        loop_state, states, attrs = read_checkpoint(path)
+        int(loop_state["window"])
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError) as err:
+        # truncated, emptied, zeroed or overwritten: h5py cannot open it, or the checksum
+        # or a state's finiteness says it is not what was written
+        why = str(err) if isinstance(err, CorruptFile) else "truncated or corrupt"
+        raise ResumeError(
+            f"{path}: not a readable checkpoint ({why}); rerun without --resume or restore it"
+        ) from None
     changed = "run without --resume, or resume with the settings it was written with"
+    stored = attrs.get(IDENTITY_ATTR)
+    if identity is not None and stored is not None and stored != identity:
+        keys = ", ".join(identity_changes(stored, identity))
+        raise ResumeError(
+            f"{path}: belongs to another case ({keys} changed since it was written); {changed}"
+        )
     saved_dt = float(loop_state.get("dt_s", np.nan))  # older checkpoints: not saved
     if dt is not None and abs(saved_dt - dt) > 1e-9 * dt:
         raise ResumeError(
@@ -223,9 +262,19 @@ def load_checkpoint(
 
 def _check_results_reach(path: Path, windows: int) -> None:
     """The results a resumed run appends to must hold every window the checkpoint did."""
-    rows = stored_rows(path)
+    try:
+        rows = stored_rows(path)
+    except (OSError, KeyError, ValueError) as err:
+        raise ResumeError(_unreadable_results(path, err)) from None
     if rows < windows:
         raise ResumeError(
             f"{path}: holds {rows} windows, the checkpoint {windows}: the run's results are "
             "incomplete, so it cannot go on from there; run without --resume"
         )
+
+
+def _unreadable_results(path: Path, err: Exception) -> str:
+    return (
+        f"{path}: not a readable results file (truncated or corrupt: {err}); rerun without "
+        "--resume into a new --output (or with --overwrite), or restore it"
+    )

@@ -3,4 +3,5 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-exec .venv/bin/fsi-run cases/fixed_head_3Hz "$@"
+# --overwrite: the main job is rerun on purpose (with --resume it continues instead)
+exec .venv/bin/fsi-run cases/fixed_head_3Hz --overwrite "$@"

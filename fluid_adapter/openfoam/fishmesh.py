@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from fsi_orchestrator.case import Case
+from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.schema import GeometryKind, MeshLevel
 
 from .grading import Spacing, graded, two_sided, uniform
@@ -162,7 +162,32 @@ _FACE = {
 }
 
 
+def check_tank(geo: TankGeometry, res: Resolution) -> None:
+    """The tank must leave at least one rim cell between the plate and each wall, or the
+    grading has no room (a CaseError naming the key and its least value)."""
+    h_max = float(np.max(geo.height(np.linspace(0, geo.length, 200))))
+    ahead, behind = -geo.x_front, geo.x_back - geo.length
+    if min(ahead, behind) < res.edge_m:
+        raise CaseError(
+            f"case.toml: fluid.tank_length_m / fluid.tank_nose_x_m: the tank leaves "
+            f"{ahead:.3g} m ahead of the nose and {behind:.3g} m behind the tail; the mesh "
+            f"needs at least {res.edge_m:g} m on each side (a tank at least "
+            f"{geo.length + 2 * res.edge_m:.3g} m long, the plate centred)"
+        )
+    if geo.depth < h_max + 2 * res.edge_m:
+        raise CaseError(
+            f"case.toml: fluid.tank_depth_m ({geo.depth:g} m) is too small for the mesh "
+            f"grading around the {h_max:.3g} m high plate: at least {h_max + 2 * res.edge_m:.3g} m"
+        )
+    if geo.width < 2 * res.normal_m:
+        raise CaseError(
+            f"case.toml: fluid.tank_width_m ({geo.width:g} m) is too small for the mesh "
+            f"grading: at least {2 * res.normal_m:.3g} m"
+        )
+
+
 def tank_topology(geo: TankGeometry, res: Resolution) -> BlockTopology:
+    check_tank(geo, res)
     xs = np.array([geo.x_front, *geo.plate_breaks, geo.x_back])
     zs = np.array([-geo.width / 2, 0.0, geo.width / 2])
     x_cells = _x_spacings(geo, res)

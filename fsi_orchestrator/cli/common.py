@@ -31,7 +31,26 @@ def base_parser(prog: str, description: str) -> argparse.ArgumentParser:
         help="override a case value, e.g. --set actuation.frequency_hz=5",
     )
     parser.add_argument("--json", action="store_true", help="print the result summary as JSON")
+    add_version(parser)
     return parser
+
+
+class _Version(argparse.Action):
+    """``--version``: the package version and git commit, looked up only when asked."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs) -> None:
+        kwargs.setdefault("help", "print the version and exit")
+        super().__init__(option_strings, dest, nargs=0, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        from ..provenance import version
+
+        print(f"{parser.prog} {version()}")
+        parser.exit()
+
+
+def add_version(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--version", action=_Version)
 
 
 def load(args: argparse.Namespace) -> Case:

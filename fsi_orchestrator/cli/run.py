@@ -14,11 +14,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..case import Case, CaseError
+from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..case.timing import case_schedule, windows_per_period
-from ..loop import OutputSettings, ResumeError, Schedule, StopRule, WindowLoop
-from ..results import CHECKPOINT_FILE, ResultsFile
+from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
+from ..provenance import case_identity, run_attributes
+from ..results import ResultsFile
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,
@@ -28,6 +29,7 @@ from .compose import (
     shell_with_fast_fluid,
 )
 from .modal import modal_summary
+from .outputs import check_finite, label_results, prepare_output
 from .swimming import swimming_summary
 
 
@@ -147,8 +149,12 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
     }
 
 
-def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> dict:
+def run_dynamic(
+    case: Case, output: Path, resume: bool, show_progress: bool, overrides: Sequence[str] = ()
+) -> dict:
     set_up = time.perf_counter()
+    provenance = run_attributes(case, overrides)  # the case as given, before a start's changes
+    identity = case_identity(case)
     start_note = None
     if is_coupled(case):
         factory = None
@@ -171,7 +177,8 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
         vtk_every=case.output.vtk_every,
         checkpoint_every=case.output.checkpoint_every,
         flow_every=case.output.flow_every,
-        attributes={"case": str(case.directory), "dt_s": schedule.dt},
+        attributes={**provenance, "dt_s": schedule.dt},
+        case_identity=identity,
     )
     start = time.perf_counter()
     try:
@@ -194,6 +201,7 @@ def run_dynamic(case: Case, output: Path, resume: bool, show_progress: bool) -> 
     elif "slender_body_mean_thrust_n" in summary:
         summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
         summary["thrust_source"] = "slender_body"
+    label_results(path, {"thrust_source": summary.get("thrust_source", "none")})
     summary["wall_s"] = time.perf_counter() - start
     summary["setup_s"] = start - set_up
     if added is not None:  # the fast fluid's added mass is in the structure's equations
@@ -359,15 +367,11 @@ def _body(args: argparse.Namespace) -> int:
     elif kind is AnalysisKind.SWIMMING:
         summary = swimming_summary(case)
     else:
-        try:  # before the set-up's seconds: a folder that cannot be written fails at once
-            output.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
-        if args.resume and not (output / CHECKPOINT_FILE).exists():
-            raise ResumeError(
-                f"{output / CHECKPOINT_FILE}: no checkpoint to resume from (run without --resume)"
-            )
-        summary = run_dynamic(case, output, args.resume, show_progress=not args.quiet)
+        prepare_output(output, args.resume, args.overwrite)
+        summary = run_dynamic(
+            case, output, args.resume, show_progress=not args.quiet, overrides=args.overrides
+        )
+        check_finite(Path(summary["results"]), summary)
     emit(summary, args.json)
     return EXIT_OK
 
@@ -377,6 +381,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--output", help="output folder (default: CASE/output)")
     parser.add_argument(
         "--resume", action="store_true", help="continue a killed run from its last checkpoint"
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the run an existing --output holds (without it, such a folder is refused)",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     return run_main(_body, parser, argv)

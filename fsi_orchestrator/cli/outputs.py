@@ -1,0 +1,78 @@
+"""fsi-run's output folder: refused before the set-up where it cannot be written or already
+holds a run (no silent overwrite), and a run's results checked and labelled at its end."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from ..case import CaseError
+from ..loop import ResumeError
+from ..results import CHECKPOINT_FILE, RESULTS_FILE, check_writable
+
+
+def prepare_output(output: Path, resume: bool, overwrite: bool) -> None:
+    """Before the set-up's seconds: a folder that cannot be written, a --resume without a
+    checkpoint, and a folder holding an earlier run (without --resume or --overwrite) each
+    fail at once in one line."""
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+    checkpoint = output / CHECKPOINT_FILE
+    if resume and not checkpoint.exists():
+        raise ResumeError(f"{checkpoint}: no checkpoint to resume from (run without --resume)")
+    held = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (output / n).exists()]
+    if held and not resume and not overwrite:
+        raise CaseError(
+            f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "
+            "--resume, write elsewhere with --output, or replace it with --overwrite"
+        )
+    check_writable(output)
+    if held and not resume:  # --overwrite: a later --resume must not find the old checkpoint
+        checkpoint.unlink(missing_ok=True)
+
+
+# the recorded quantities a run's figures come from; coupling statistics may be NaN ("none")
+CHECKED_GROUPS = ("time_s", "shell/", "fluid/")
+CHECKED_SUMMARY = ("tip_amplitude_m", "tip_max_abs_m", "mean_thrust_n", "end_time_s")
+
+
+def check_finite(results: Path, summary: Mapping[str, Any]) -> None:
+    """A run whose results hold NaN or infinity ends with an error, never with exit 0."""
+    bad: tuple[str, int] | None = None
+    with h5py.File(results, "r", locking=False) as h5:
+        names: list[str] = []
+        h5.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+        for name in sorted(names):
+            if not name.startswith(CHECKED_GROUPS):
+                continue
+            rows = np.asarray(h5[name][()], dtype=float).reshape(h5[name].shape[0], -1)
+            broken = ~np.isfinite(rows).all(axis=1)
+            if broken.any() and (bad is None or np.argmax(broken) < bad[1]):
+                bad = (name, int(np.argmax(broken)))
+    if bad is not None:
+        name, row = bad
+        raise RuntimeError(
+            f"{results}: {name} is not finite from window {row + 1} on: the run diverged; "
+            "try a smaller time step (time.steps_per_period or time.step_s) and check the "
+            "case's values"
+        )
+    for key in CHECKED_SUMMARY:
+        value = summary.get(key)
+        if isinstance(value, float) and not np.isfinite(value):
+            raise RuntimeError(
+                f"{results}: the run's {key} is not finite; try a smaller time step "
+                "(time.steps_per_period or time.step_s) and check the case's values"
+            )
+
+
+def label_results(results: Path, attributes: Mapping[str, Any]) -> None:
+    """Root attributes known only at a run's end (e.g. ``thrust_source``)."""
+    with h5py.File(results, "a", locking=False) as h5:
+        for key, value in attributes.items():
+            h5.attrs[key] = value

@@ -1,0 +1,134 @@
+"""What made a results file: the resolved case as TOML text, the overrides, the version, the
+fluid model, the time and host; and the identity a checkpoint carries of the case it belongs
+to. The root attribute names are a contract (docs/case_format.md, "Faults and provenance")."""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import json
+import math
+import socket
+import subprocess
+from collections.abc import Mapping, Sequence
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+from . import __version__
+from .case import Case
+
+# the sections a checkpoint's state depends on: resuming with another plate, material, support
+# or mesh would load numbers that mean something else
+IDENTITY_SECTIONS = ("geometry", "material", "boundary", "mesh")
+IDENTITY_ATTR = "case_identity"
+
+
+def version() -> str:
+    """The package version, with the git commit where the source is a git checkout."""
+    try:
+        from importlib.metadata import version as installed
+
+        text = installed("fishfsi")
+    except Exception:  # not installed (a plain checkout on the path)
+        text = __version__
+    root = Path(__file__).resolve().parents[1]
+    if (root / ".git").exists():
+        try:
+            commit = subprocess.run(
+                ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                capture_output=True,
+                text=True,
+                timeout=5,
+                check=False,
+            ).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            commit = ""
+        if commit:
+            text += f" (git {commit})"
+    return text
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def case_dict(case: Case) -> dict[str, Any]:
+    """Every section of the resolved case, defaults included (None: unset)."""
+    raw = _plain(dataclasses.asdict(case))
+    raw.pop("directory", None)
+    return raw
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML for {type(value).__name__}")
+
+
+def case_toml(case: Case) -> str:
+    """The resolved case as a case.toml that loads back to the same case: the keys that
+    differ from their defaults, then the defaults as comments (a default may not apply to
+    this case, e.g. a preset to a beam, and the loader refuses such a key when given)."""
+    lines: list[str] = []
+    for section, values in case_dict(case).items():
+        defaults = _plain(dataclasses.asdict(type(getattr(case, section))()))
+        lines.append(f"[{section}]")
+        for k, v in values.items():
+            if v is None:
+                continue
+            line = f"{k} = {_toml_value(v)}"
+            lines.append(line if v != defaults.get(k) else f"# {line}  (default)")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def case_identity(case: Case) -> str:
+    """The sections a checkpoint belongs to, as JSON text."""
+    raw = case_dict(case)
+    return json.dumps({s: raw[s] for s in IDENTITY_SECTIONS}, sort_keys=True)
+
+
+def identity_changes(stored: str, current: str, limit: int = 3) -> list[str]:
+    """``section.key`` of the first few keys that differ between two identities."""
+    a, b = json.loads(stored), json.loads(current)
+    keys = sorted(
+        f"{s}.{k}"
+        for s in set(a) | set(b)
+        for k in set(a.get(s, {})) | set(b.get(s, {}))
+        if a.get(s, {}).get(k) != b.get(s, {}).get(k)
+    )
+    return keys[:limit]
+
+
+def run_attributes(case: Case, overrides: Sequence[str]) -> dict[str, Any]:
+    """Root attributes of results.h5 known before the run (``thrust_source`` comes at its end)."""
+    return {
+        "case": str(case.directory),
+        "case_toml": case_toml(case),
+        "overrides": json.dumps(list(overrides)),
+        "version": version(),
+        "fluid_model": case.fluid.model.value,
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "host": socket.gethostname(),
+    }

@@ -1,0 +1,368 @@
+"""File faults around fsi-run (a damaged checkpoint or results file, a folder that cannot be
+written, a full disk, an earlier run in the folder, a NaN) each end in one line naming the
+file, with a non-zero exit and nothing already written lost; and results.h5 records what made
+it (provenance attributes, units)."""
+
+from __future__ import annotations
+
+import datetime
+import errno
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+import fsi_orchestrator
+from fsi_orchestrator import results as results_mod
+from fsi_orchestrator.case import CaseError, load_case
+from fsi_orchestrator.cli import modal as modal_cli
+from fsi_orchestrator.cli import post as post_cli
+from fsi_orchestrator.cli import run as run_cli
+from fsi_orchestrator.cli import sweep as sweep_cli
+from fsi_orchestrator.provenance import case_dict
+from fsi_orchestrator.results import OutputError, ResultsFile
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# the piezo-driven beam alone: 10 windows in about a second, checkpoints after 5 and 10
+BEAM = """
+[geometry]
+kind = "beam"
+[actuation]
+frequency_hz = 10.0
+[time]
+periods = 0.5
+steps_per_period = 20
+[mesh]
+level = "coarse"
+[output]
+vtk = false
+checkpoint_every = 5
+"""
+
+
+def run(capsys, *args: str) -> tuple[int, list[str]]:
+    """fsi-run in this process: exit code and the lines on stderr."""
+    code = run_cli.main([*map(str, args), "--quiet", "--json"])
+    return code, capsys.readouterr().err.strip().splitlines()
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory) -> Path:
+    """A case folder and the output of its finished run (copied by each test)."""
+    root = tmp_path_factory.mktemp("finished")
+    (root / "case").mkdir()
+    (root / "case" / "case.toml").write_text(BEAM)
+    assert run_cli.main([str(root / "case"), "--quiet", "--set", "output.vtk=true"]) == 0
+    return root
+
+
+@pytest.fixture
+def done(finished, tmp_path) -> tuple[Path, Path]:
+    """(case folder, output folder of a finished run) of one's own."""
+    shutil.copytree(finished, tmp_path, dirs_exist_ok=True)
+    return tmp_path / "case", tmp_path / "case" / "output"
+
+
+def one_line_naming(lines: list[str], path: Path, *words: str) -> str:
+    assert len(lines) == 1, lines
+    assert str(path) in lines[0] and "Traceback" not in lines[0]
+    for word in words:
+        assert word in lines[0]
+    return lines[0]
+
+
+# ------------------------------------------------------------------ damaged files on --resume
+def _truncate(p: Path) -> None:
+    os.truncate(p, p.stat().st_size // 3)
+
+
+def _empty(p: Path) -> None:
+    p.write_bytes(b"")
+
+
+def _zero(p: Path) -> None:
+    p.write_bytes(bytes(p.stat().st_size))
+
+
+def _random_bytes(p: Path) -> None:
+    data = bytearray(p.read_bytes())
+    rng = np.random.default_rng(0)
+    start = len(data) // 2  # in the data, past the superblock: h5py still opens the file
+    data[start : start + 64] = rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
+    p.write_bytes(bytes(data))
+
+
+def _changed_value(p: Path) -> None:
+    """A well-formed file whose numbers are not the ones written."""
+    with h5py.File(p, "a") as h5:
+        h5["participants/shell/x"][0] += 1e-3
+
+
+def _nan_state(p: Path) -> None:
+    """NaN in the structure's state, the checksum made to fit: caught as not finite."""
+    with h5py.File(p, "a") as h5:
+        x = h5["participants/shell/x"]
+        x[0] = np.nan
+        h5.attrs[results_mod.CHECKSUM_ATTR] = results_mod.checksum(h5)
+
+
+@pytest.mark.parametrize(
+    ("damage", "why"),
+    [
+        (_truncate, "truncated or corrupt"),
+        (_empty, "truncated or corrupt"),
+        (_zero, "truncated or corrupt"),
+        (_random_bytes, ""),
+        (_changed_value, "checksum does not match"),
+        (_nan_state, "not finite"),
+    ],
+    ids=["truncated", "emptied", "zeroed", "random-bytes", "changed-value", "nan"],
+)
+def test_a_damaged_checkpoint_is_refused_on_resume_in_one_line(done, capsys, damage, why):
+    case, out = done
+    checkpoint, results = out / "checkpoint.h5", out / "results.h5"
+    before = results.read_bytes()
+    damage(checkpoint)
+    code, lines = run(capsys, case, "--resume")
+    assert code == 1
+    one_line_naming(lines, checkpoint, "not a readable checkpoint", why, "without --resume")
+    assert results.read_bytes() == before  # nothing loaded, nothing written
+
+
+def test_a_checkpoint_of_another_case_is_refused(done, capsys):
+    """Same shapes, another material: resuming would mix two cases."""
+    case, out = done
+    code, lines = run(capsys, case, "--resume", "--set", "material.youngs_modulus_pa=2e9")
+    assert code == 1
+    one_line_naming(lines, out / "checkpoint.h5", "another case", "material.youngs_modulus_pa")
+
+
+def test_a_damaged_results_file_is_refused_on_resume_in_one_line(done, capsys):
+    case, out = done
+    checkpoint = out / "checkpoint.h5"
+    kept = checkpoint.read_bytes()
+    _truncate(out / "results.h5")
+    code, lines = run(capsys, case, "--resume")
+    assert code == 1
+    one_line_naming(lines, out / "results.h5", "not a readable results file")
+    assert checkpoint.read_bytes() == kept
+
+
+# ------------------------------------------------------------------ folders that cannot be written
+def test_a_read_only_output_folder_is_refused_before_the_set_up(done, capsys, monkeypatch):
+    """As root the mode bits do not stop a write (a read-only mount would): there the probe
+    write is made to fail as the mount would make it."""
+    case, out = done
+    fresh = out.parent / "read_only"
+    fresh.mkdir()
+    if os.geteuid() == 0:
+
+        def refused(directory):
+            raise PermissionError(errno.EROFS, os.strerror(errno.EROFS), str(directory))
+
+        monkeypatch.setattr(results_mod, "_probe_write", refused)
+    else:
+        fresh.chmod(0o555)
+    built = []
+    monkeypatch.setattr(run_cli, "run_dynamic", lambda *a, **k: built.append(1))
+    try:
+        code, lines = run(capsys, case, "--output", fresh)
+    finally:
+        fresh.chmod(0o755)
+    assert code == 1 and not built
+    one_line_naming(lines, fresh, "not writable", "nothing was run")
+    assert list(fresh.iterdir()) == []
+
+
+def test_a_read_only_results_file_is_refused_before_the_set_up(done, capsys, monkeypatch):
+    """Resuming where results.h5 cannot be opened for writing."""
+    case, out = done
+    results = out / "results.h5"
+    real_open = os.open
+
+    def guarded_open(path, flags, *args, **kwargs):
+        if Path(path) == results and flags & (os.O_WRONLY | os.O_RDWR):
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+        return real_open(path, flags, *args, **kwargs)
+
+    monkeypatch.setattr(results_mod.os, "open", guarded_open)
+    code, lines = run(capsys, case, "--resume")
+    assert code == 1
+    one_line_naming(lines, results, "not writable")
+
+
+def test_a_full_disk_from_the_start_is_refused_and_leaves_no_results_file(
+    finished, tmp_path, capsys, monkeypatch
+):
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(results_mod.shutil, "disk_usage", lambda p: usage._replace(free=4096))
+    code, lines = run(capsys, finished / "case", "--output", tmp_path / "out")
+    assert code == 1
+    one_line_naming(lines, tmp_path / "out", "disk full", "nothing was run")
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_a_results_file_that_cannot_be_created_is_not_left_empty(tmp_path, monkeypatch):
+    path = tmp_path / "results.h5"
+
+    def full(name, mode, **kwargs):
+        Path(name).write_bytes(b"")  # HDF5 creates the file, then fails to write it
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(results_mod.h5py, "File", full)
+    with pytest.raises(OutputError, match="results.h5: disk full"):
+        ResultsFile(path)
+    assert not path.exists()
+
+
+def test_a_full_disk_during_a_checkpoint_keeps_the_previous_one_and_resumes(
+    done, capsys, monkeypatch
+):
+    """The second checkpoint's write fails for lack of space (an injected ENOSPC): one line,
+    exit 1, the first checkpoint and the results kept; with room again --resume finishes the
+    run exactly as the uninterrupted one."""
+    case, reference = done
+    out = reference.parent / "full"
+    expected = h5py.File(reference / "results.h5", "r")["shell/tip_displacement_m"][:]
+    real_put, calls = results_mod._put, []
+
+    def put(group, key, value):
+        if key == "window":
+            calls.append(value)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        real_put(group, key, value)
+
+    monkeypatch.setattr(results_mod, "_put", put)
+    code, lines = run(capsys, case, "--output", out)
+    assert code == 1
+    one_line_naming(lines, out / "checkpoint.h5", "disk full", "previous checkpoint", "--resume")
+    assert sorted(p.name for p in out.iterdir()) == ["checkpoint.h5", "results.h5"]
+    assert results_mod.read_checkpoint(out / "checkpoint.h5")[0]["window"] == 5
+    assert results_mod.stored_rows(out / "results.h5") == 10
+
+    monkeypatch.setattr(results_mod, "_put", real_put)
+    code, lines = run(capsys, case, "--output", out, "--resume")
+    assert code == 0, lines
+    with h5py.File(out / "results.h5", "r") as h5:
+        np.testing.assert_allclose(h5["shell/tip_displacement_m"][:], expected, atol=1e-12)
+
+
+def test_a_full_disk_while_recording_stops_in_one_line(tmp_path, monkeypatch):
+    """Results are refused while there is room for HDF5 to fail cleanly: the rows so far
+    stay readable."""
+    results = ResultsFile(tmp_path / "results.h5")
+    results.append({"time_s": 0.1, "shell/tip_displacement_m": [0.0, 0.0, 1e-3]})
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(results_mod.shutil, "disk_usage", lambda p: usage._replace(free=1000))
+    with pytest.raises(OutputError, match="results.h5: disk full; the results up to window 1"):
+        results.append({"time_s": 0.2, "shell/tip_displacement_m": [0.0, 0.0, 2e-3]})
+    results.close()
+    assert results_mod.stored_rows(tmp_path / "results.h5") == 1
+
+
+# ------------------------------------------------------------------ an earlier run, a NaN
+def test_a_rerun_into_a_folder_holding_results_is_refused_unless_overwrite(done, capsys):
+    case, out = done
+    before = (out / "results.h5").read_bytes()
+    code, lines = run(capsys, case)
+    assert code == 2
+    one_line_naming(lines, out, "--resume", "--output", "--overwrite")
+    assert (out / "results.h5").read_bytes() == before
+    code, lines = run(capsys, case, "--overwrite")
+    assert code == 0, lines
+
+
+def test_a_nan_result_never_exits_zero(done, capsys, monkeypatch):
+    case, out = done
+    with h5py.File(out / "results.h5", "a") as h5:
+        h5["shell/tip_displacement_m"][7, 2] = np.nan
+    summary = {"results": str(out / "results.h5"), "tip_amplitude_m": float("nan")}
+    monkeypatch.setattr(run_cli, "run_dynamic", lambda *a, **k: summary)
+    code, lines = run(capsys, case, "--overwrite")
+    assert code == 1
+    one_line_naming(lines, out / "results.h5", "shell/tip_displacement_m", "window 8", "time step")
+
+
+def test_a_tank_too_small_for_the_mesh_grading_names_the_keys():
+    import dataclasses
+
+    from fluid_adapter.openfoam.fishmesh import LEVELS, tank_geometry, tank_topology
+    from fsi_orchestrator.case.schema import MeshLevel
+
+    geo = tank_geometry(load_case(ROOT / "cases" / "fixed_head_3Hz"))
+    res = LEVELS[MeshLevel.DEFAULT]
+    for changed, key in [
+        (dataclasses.replace(geo, x_front=-1e-4), "fluid.tank_length_m"),
+        (dataclasses.replace(geo, depth=0.03), "fluid.tank_depth_m"),
+        (dataclasses.replace(geo, width=1e-3), "fluid.tank_width_m"),
+    ]:
+        with pytest.raises(CaseError, match=rf"{key}.*at least"):
+            tank_topology(changed, res)
+
+
+# ------------------------------------------------------------------ provenance
+def test_results_record_what_made_them(tmp_path, capsys):
+    """Root attributes: the resolved case as TOML (it loads back to the same case), the
+    overrides, the version, the fluid model, the thrust source, time and host; a unit on
+    every dataset; newton_iterations said to be cumulative."""
+    sets = ["time.periods=0.1", "output.vtk=false"]
+    args = [ROOT / "cases" / "beam_in_liquid", "--output", tmp_path / "out"]
+    code, _ = run(capsys, *args, *[x for s in sets for x in ("--set", s)])
+    assert code == 0
+    with h5py.File(tmp_path / "out" / "results.h5", "r") as h5:
+        attrs = dict(h5.attrs)
+        units = {}
+        h5.visititems(
+            lambda n, o: units.update({n: dict(o.attrs)}) if isinstance(o, h5py.Dataset) else None
+        )
+    case = load_case(ROOT / "cases" / "beam_in_liquid", sets)
+    assert tomllib.loads(attrs["case_toml"])["time"]["periods"] == 0.1
+    (tmp_path / "again").mkdir()
+    (tmp_path / "again" / "case.toml").write_text(attrs["case_toml"])
+    assert case_dict(load_case(tmp_path / "again")) == case_dict(case)
+    assert json.loads(attrs["overrides"]) == sets
+    assert attrs["version"].startswith(fsi_orchestrator.__version__)
+    assert attrs["fluid_model"] == "potential"
+    assert attrs["thrust_source"] == "slender_body" or attrs["thrust_source"] == "none"
+    created = datetime.datetime.fromisoformat(attrs["created"])
+    assert abs(datetime.datetime.now(datetime.UTC) - created).total_seconds() < 600
+    assert attrs["host"]
+    assert units["time_s"]["units"] == "s" and units["wall_s"]["units"] == "s"
+    assert units["shell/tip_displacement_m"]["units"] == "m"
+    assert all("units" in a for a in units.values())
+    newton = units["shell/newton_iterations"]
+    assert newton["units"] == "1" and "cumulative" in newton["description"]
+
+
+def test_results_can_be_read_by_another_process_while_the_run_writes(tmp_path):
+    """The writer takes no HDF5 file lock and flushes every window: a reader in another
+    process (default h5py settings) sees the rows written so far."""
+    path = tmp_path / "results.h5"
+    results = ResultsFile(path)
+    reader = [sys.executable, "-c", f"import h5py; print(h5py.File({str(path)!r}, 'r')"]
+    reader[-1] += "['time_s'].shape[0])"
+    seen = []
+    for k in range(3):
+        results.append({"time_s": 0.1 * k, "shell/tip_displacement_m": [0.0, 0.0, k]})
+        done = subprocess.run(reader, capture_output=True, text=True, check=False)
+        assert done.returncode == 0, done.stderr
+        seen.append(int(done.stdout))
+    results.close()
+    assert seen == [1, 2, 3]
+
+
+@pytest.mark.parametrize("main", [run_cli.main, modal_cli.main, sweep_cli.main, post_cli.main])
+def test_every_command_has_version(main, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert fsi_orchestrator.__version__ in capsys.readouterr().out
