@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -172,3 +173,67 @@ def swimming_summary(case: Case) -> dict:
     summary.update({k: v for k, v in row.items() if k not in summary and k != "status"})
     summary["wall_s"] = time.perf_counter() - start
     return summary
+
+
+# The seed's measured swimming (square wave, -500..+1500 V unless noted); the body length of
+# each robot is 0.167 m (Table 4.1; Tables 5.2, 5.6 keep it).
+MEASURED = {
+    "original": {
+        "speed_m_s": 0.72,  # Sec. 4.4, Fig. 4.11: the maximum, at 18 Hz
+        "frequency_hz": 18.0,
+        # Sec. 4.5: 18 Hz, left -500..+1500 V, right -500..+500 V turns right (and mirrored)
+        "turning_deg_s": -27.0,
+        "turning_frequency_hz": 18.0,
+    },
+    "serial": {
+        "speed_m_s": 0.792,  # Sec. 5.3.2, Fig. 5.15: the maximum, at 25 Hz
+        "frequency_hz": 25.0,
+        "body_lengths_per_s": 4.6,  # Table 5.8
+        "swimming_number": 0.6,  # Table 5.8 (maximum)
+    },
+    "integrative": {
+        "body_lengths_per_s": 3.5,  # Table 5.8 (maximum; its frequency is not given)
+        "swimming_number": 0.75,  # Table 5.8 (maximum)
+        "turning_deg_s": 53.0,  # Sec. 5.4.2: 15 Hz, turning left (51.6 deg/s turning right)
+        "turning_frequency_hz": 15.0,
+    },
+}
+
+
+def plot_swimming_sweep(csv_path: Path, output: Path) -> Path | None:
+    """``swimming.png`` from a swimming sweep's table (None for another sweep): speed, swimming
+    number and turning rate against frequency per waveform, with the seed's measured points."""
+    import csv
+
+    import matplotlib.pyplot as plt
+
+    with open(csv_path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows or SWIMMING_KEYS[0] not in rows[0]:
+        return None
+    keys = ("swimming_speed_m_s", "swimming_number", "turning_rate_deg_s")
+    labels = ("speed [m/s]", "swimming number V/(f L)", "turning rate [deg/s] (+ left)")
+    fig, axes = plt.subplots(3, 1, figsize=(6.5, 8.0), sharex=True)
+    for waveform in sorted({r["waveform"] for r in rows}):
+        sel = [r for r in rows if r["waveform"] == waveform]
+        f = [float(r["frequency_hz"]) for r in sel]
+        for ax, key in zip(axes, keys, strict=True):
+            ax.plot(f, [float(r[key] or "nan") for r in sel], "o-", label=f"model, {waveform}")
+    for robot, m in MEASURED.items():  # the seed's robots, square wave
+        if "frequency_hz" in m:
+            axes[0].plot(m["frequency_hz"], m["speed_m_s"], "s", label=f"seed, {robot}")
+        if "swimming_number" in m:
+            axes[1].axhline(m["swimming_number"], ls=":", color="grey")
+            axes[1].annotate(f"seed max, {robot}", (0, m["swimming_number"]), fontsize=7)
+        if "turning_deg_s" in m:
+            axes[2].plot(m["turning_frequency_hz"], m["turning_deg_s"], "s", label=f"seed, {robot}")
+    for ax, label in zip(axes, labels, strict=True):
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel("driving frequency [Hz]")
+    fig.tight_layout()
+    target = output / "swimming.png"
+    fig.savefig(target, dpi=120)
+    plt.close(fig)
+    return target

@@ -1,0 +1,217 @@
+"""Swimming (issue 31): Lighthill's thrust at forward speed, the body's drag, the self-propelled
+speed and the turning rate (fluid_adapter/swimming.py), the contract of ``fsi-run --json`` for
+``analysis.kind = "swimming"`` and the seed's measured swimming (Sec. 4.4-4.5, Table 5.8)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fluid_adapter.swimming import (
+    BodyDrag,
+    FormDrag,
+    mean_thrust,
+    self_propelled_speed,
+    skin_friction_coefficient,
+    turning_rate,
+)
+from fsi_orchestrator.case import load_case
+from fsi_orchestrator.case.schema import Waveform
+from fsi_orchestrator.cli import run, sweep
+from fsi_orchestrator.cli.swimming import MEASURED, SWIMMING_KEYS, swimming_summary
+
+ROOT = Path(__file__).resolve().parents[1]
+CASE = ROOT / "cases" / "swim_original_18Hz"
+RIGHT_TURN = "actuation.right_volts=[-500.0, 500.0]"  # Sec. 4.5: left -500..+1500 V
+RHO = 1820.0  # FC-3283 (Table 3.6)
+
+
+def travelling_wave(x, a=0.01, k=20.0, omega=2 * np.pi * 10, n=64):
+    t = np.arange(n) / n * 2 * np.pi / omega
+    return t[1] - t[0], a * np.sin(k * x[None, :] - omega * t[:, None])
+
+
+def test_thrust_of_a_travelling_wave_is_lighthills_closed_form():
+    # constant height, h = a sin(k x - w t): <T> = A a^2 (w^2 - V^2 k^2) / 4 (Lighthill 1960)
+    x = np.linspace(0.0, 0.15, 801)
+    b = np.full_like(x, 0.02)
+    a, k, omega = 0.01, 20.0, 2 * np.pi * 10
+    dt, h = travelling_wave(x, a, k, omega)
+    area = RHO * np.pi * 0.02**2
+    for v in (0.0, 0.5, 2.0):
+        expected = area * a**2 * (omega**2 - v**2 * k**2) / 4
+        got = mean_thrust(x, b, h, dt, v, density_kg_m3=RHO)
+        assert got == pytest.approx(expected, rel=1e-4)
+
+
+def test_skin_friction_lines():
+    assert skin_friction_coefficient(1e6, "ittc-1957") == pytest.approx(0.075 / 16)
+    assert skin_friction_coefficient(1e5, "blasius") == pytest.approx(1.328 / np.sqrt(1e5))
+    drag = BodyDrag(
+        density_kg_m3=RHO,
+        kinematic_viscosity_m2_s=1e-6,
+        length_m=0.5,
+        wetted_area_m2=0.01,
+        form=(FormDrag(name="float", frontal_area_m2=1e-4, drag_coefficient=1.05),),
+    )
+    # V = 2 m/s: Re = 1e6, q = 3640 Pa
+    assert drag.total(2.0) == pytest.approx(3640 * (0.075 / 16 * 0.01 + 1.05e-4))
+
+
+def test_self_propelled_speed_balances_thrust_and_drag():
+    x = np.linspace(0.0, 0.15, 201)
+    b = np.where(x < 0.14, 0.025, 0.02)
+    dt, h = travelling_wave(x * (x / 0.15))
+    drag = BodyDrag(
+        density_kg_m3=RHO, kinematic_viscosity_m2_s=0.75e-6, length_m=0.15, wetted_area_m2=0.014
+    )
+
+    def thrust(v):
+        return mean_thrust(x, b, h, dt, v, density_kg_m3=RHO)
+
+    speed = self_propelled_speed(thrust, drag.total)
+    assert speed > 0
+    assert thrust(speed) == pytest.approx(drag.total(speed), rel=1e-6)
+
+
+def bent_body(sign: float, bend: float):
+    """A travelling wave on a body whose mean shape bends its tail toward sign * z."""
+    x = np.linspace(0.0, 0.167, 121)
+    b = np.where(x < 0.14, 0.0275, 0.02)
+    dt, h = travelling_wave(x, a=0.005 * (x / 0.167) ** 2)
+    return x, b, dt, sign * (h + bend * (x / 0.167) ** 2)
+
+
+def turning_of(sign: float, bend: float) -> float:
+    x, b, dt, h = bent_body(sign, bend)
+    load = dict(speed_m_s=0.5, x_ref_m=0.06, density_kg_m3=RHO, crossflow_drag_coefficient=1.2)
+    return turning_rate(x, b, h, dt, **load).yaw_rate_rad_s
+
+
+def test_turning_flips_with_the_mirrored_drive_and_vanishes_without_a_mean_bend():
+    right = turning_of(1.0, -0.01)  # tail bent to -z (right): turns right
+    assert right < 0
+    assert turning_of(-1.0, -0.01) == pytest.approx(-right, rel=1e-9)
+    assert turning_of(1.0, 0.0) == pytest.approx(0.0, abs=1e-9 * abs(right))
+
+
+def fsi_run(capsys, *overrides: str) -> tuple[int, str, str]:
+    argv = [str(CASE), "--json", "--quiet"]
+    for o in overrides:
+        argv += ["--set", o]
+    code = run.main(argv)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture(scope="module")
+def original_runs():
+    """The shipped case with the seed's right-turn drive (~15 s)."""
+    results = {}
+    for name, overrides in (("right_turn", (RIGHT_TURN,)),):
+        case = load_case(CASE, overrides)
+        results[name] = swimming_summary(case)
+    return results
+
+
+def test_fsi_run_prints_the_contract(capsys):
+    code, out, err = fsi_run(capsys)
+    assert code == 0, err
+    summary = json.loads(out)
+    for key in SWIMMING_KEYS:
+        assert np.isfinite(summary[key]), key
+    v, f, length = summary["swimming_speed_m_s"], 18.0, 0.167
+    assert summary["body_lengths_per_s"] == pytest.approx(v / length)
+    assert summary["swimming_number"] == pytest.approx(v / (f * length))  # eq. 5-15
+    assert summary["thrust_at_speed_n"] == pytest.approx(summary["drag_at_speed_n"], rel=1e-6)
+    assert summary["turning_rate_deg_s"] == pytest.approx(0.0, abs=1e-6)  # symmetric drive
+
+
+def test_the_seeds_right_turn_turns_right(original_runs):
+    assert original_runs["right_turn"]["turning_rate_deg_s"] < 0
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured about 27 deg/s (Sec. 4.5, 18 Hz square); the model gives about 15 deg/s",
+)
+def test_the_seeds_right_turn_rate_within_a_factor_1_5(original_runs):
+    rate = -original_runs["right_turn"]["turning_rate_deg_s"]
+    assert 27.0 / 1.5 <= rate <= 27.0 * 1.5
+
+
+@pytest.mark.parametrize(
+    "override, key",
+    [
+        ("swimming.speed_m_s=-0.1", "swimming.speed_m_s"),
+        ("swimming.speed_m_s=nan", "swimming.speed_m_s"),
+        ("swimming.float_drag_coefficient=-1.0", "swimming.float_drag_coefficient"),
+        ("swimming.head_weight_drag_coefficient=inf", "swimming.head_weight_drag_coefficient"),
+        ("swimming.crossflow_drag_coefficient=-0.5", "swimming.crossflow_drag_coefficient"),
+        ("boundary.head=clamped", "boundary.head"),
+    ],
+)
+def test_bad_input_is_one_line_naming_the_key(capsys, override, key):
+    code, out, err = fsi_run(capsys, override)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1
+    assert key in err
+
+
+FREQUENCIES = [15.0, 18.0, 25.0]
+ROBOTS = {
+    "original": (CASE, ()),
+    "serial": (ROOT / "cases/seed/serial_prototype", ("analysis.kind=swimming",)),
+    "integrative": (ROOT / "cases/seed/integrative_prototype", ("analysis.kind=swimming",)),
+}
+
+
+@pytest.fixture(scope="module")
+def square_curves():
+    """Speed against frequency, square wave (the seed's swimming drive), coarse shell."""
+    curves = {}
+    for robot, (folder, overrides) in ROBOTS.items():
+        case = load_case(folder, overrides)
+        rows = sweep.linear_sweep(case, FREQUENCIES, [Waveform.SQUARE])
+        assert all(r["status"] == "ok" for r in rows)
+        curves[robot] = rows
+    return curves
+
+
+def peak(rows: list[dict], key: str = "swimming_speed_m_s") -> dict:
+    return max(rows, key=lambda r: r[key])
+
+
+def test_sweep_rows_carry_the_swimming_columns(square_curves):
+    for rows in square_curves.values():
+        for row in rows:
+            assert all(np.isfinite(row[k]) for k in SWIMMING_KEYS)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured 0.72 m/s at its 18 Hz peak (Sec. 4.4, Fig. 4.11); the model's speed "
+    "still grows at 25 Hz and is about 1.1 m/s at 18 Hz",
+)
+def test_original_speed_peaks_between_15_and_25_hz_at_the_measured_speed(square_curves):
+    best = peak(square_curves["original"])
+    assert 15.0 <= best["frequency_hz"] <= 25.0 and best["frequency_hz"] < FREQUENCIES[-1]
+    assert best["swimming_speed_m_s"] == pytest.approx(MEASURED["original"]["speed_m_s"], rel=0.3)
+
+
+def test_three_robots_peak_body_lengths_per_second_rank_as_measured(square_curves):
+    # measured maxima: serial 4.6 BL/s (Table 5.8), original 0.72 / 0.167 = 4.3 BL/s
+    # (Sec. 4.4), integrative 3.5 BL/s (Table 5.8)
+    measured = {
+        "serial": MEASURED["serial"]["body_lengths_per_s"],
+        "original": MEASURED["original"]["speed_m_s"] / 0.167,
+        "integrative": MEASURED["integrative"]["body_lengths_per_s"],
+    }
+    model = {
+        r: peak(rows, "body_lengths_per_s")["body_lengths_per_s"]
+        for r, rows in square_curves.items()
+    }
+    assert sorted(model, key=model.get) == sorted(measured, key=measured.get)
