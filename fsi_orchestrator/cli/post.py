@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -25,7 +26,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .common import EXIT_BAD_INPUT, EXIT_OK  # noqa: E402
+from .common import EXIT_BAD_INPUT, EXIT_OK, add_version  # noqa: E402
 from .swimming import plot_swimming_sweep  # noqa: E402
 
 
@@ -35,21 +36,80 @@ def _thrust(row: dict) -> float:
     return value if np.isfinite(value) else float(row["slender_body_mean_thrust_n"])
 
 
+# The seed's figures for the original fish, head held, square wave
+# (../shared/reference/seed_data.toml): the tail at 1 Hz, the thrust peak, the rig's range
+SEED_FSI_1HZ_MM = 34.0  # Fig. 3.28, the seed's FSI
+SEED_EXPERIMENT_1HZ_MM = 24.7  # Fig. 4.8
+SEED_THRUST_PEAK_HZ = 18.0  # Fig. 4.6
+RIG_READABLE_N = 0.107  # Sec. 4.3.1: 0.5 N load cell through the 45 / 210 mm lever
+
+
+def _float(row: dict, key: str) -> float:
+    try:
+        return float(row.get(key) or "nan")
+    except ValueError:
+        return float("nan")
+
+
+def sweep_label(identity: dict | None, rows: list[dict]) -> str:
+    """'openfoam, coarse' / 'slender_body, linear': the thrust's source and the mesh level."""
+    sources = sorted({r.get("thrust_source") or "slender_body" for r in rows})
+    if identity is None:
+        return ", ".join(sources)
+    case = identity.get("case", {})
+    if case.get("fluid", {}).get("model") == "openfoam" and identity.get("method") != "linear":
+        level = f"OpenFOAM {case.get('fluid', {}).get('mesh_level', '?')}"
+    else:
+        level = f"shell {case.get('mesh', {}).get('level', '?')}, {identity.get('method', '?')}"
+    return f"{', '.join(sources)}; {level}"
+
+
+def is_original_fish(identity: dict | None) -> bool:
+    geometry = (identity or {}).get("case", {}).get("geometry", {})
+    return geometry.get("kind") == "fish" and geometry.get("preset") == "original"
+
+
+def overlay_seed(ax_amp, ax_thrust) -> None:
+    """The seed's measured and simulated figures the original fish's curves answer to."""
+    ax_amp.plot([1.0], [SEED_FSI_1HZ_MM], "k^", label="seed FSI, 1 Hz square (Fig. 3.28)")
+    ax_amp.plot([1.0], [SEED_EXPERIMENT_1HZ_MM], "ks", label="seed experiment (Fig. 4.8)")
+    ax_thrust.axhspan(0, 1e3 * RIG_READABLE_N, color="0.85", label="rig's readable range")
+    ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
+
+
 def plot_sweep(csv_path: Path, output: Path) -> Path:
+    """Amplitude and thrust against frequency, one curve per waveform, with the periodic
+    estimate's uncertainty as error bars where the rows carry it; the original fish's sweep
+    also shows the seed's figures."""
     with open(csv_path, newline="") as f:
         rows = list(csv.DictReader(f))
+    identity = None
+    if (csv_path.parent / "sweep_case.json").is_file():
+        try:
+            identity = json.loads((csv_path.parent / "sweep_case.json").read_text())
+        except ValueError:
+            identity = None
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
+    if is_original_fish(identity):
+        overlay_seed(ax_amp, ax_thrust)
     for waveform in sorted({r["waveform"] for r in rows}):
         sel = [r for r in rows if r["waveform"] == waveform]
+        label = f"{waveform} ({sweep_label(identity, sel)})"
         f = [float(r["frequency_hz"]) for r in sel]
-        ax_amp.plot(f, [1e3 * float(r["tip_amplitude_m"]) for r in sel], "o-", label=waveform)
-        ax_thrust.plot(f, [1e3 * _thrust(r) for r in sel], "o-", label=waveform)
+        amp = [1e3 * _float(r, "tip_amplitude_m") for r in sel]
+        amp_err = [1e3 * _float(r, "tip_amplitude_periodic_uncertainty_m") for r in sel]
+        thrust = [1e3 * _thrust(r) for r in sel]
+        thrust_err = [1e3 * _float(r, "mean_thrust_periodic_uncertainty_n") for r in sel]
+        finite = [e if np.isfinite(e) else 0.0 for e in amp_err]
+        ax_amp.errorbar(f, amp, yerr=finite, fmt="o-", capsize=2, label=label)
+        finite = [e if np.isfinite(e) else 0.0 for e in thrust_err]
+        ax_thrust.errorbar(f, thrust, yerr=finite, fmt="o-", capsize=2, label=label)
     ax_amp.set_ylabel("tail-tip amplitude [mm]")
     ax_thrust.set_ylabel("mean thrust [mN]")
     ax_thrust.set_xlabel("driving frequency [Hz]")
     for ax in (ax_amp, ax_thrust):
         ax.grid(True, alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize="small")
     fig.tight_layout()
     target = output / "sweep.png"
     fig.savefig(target, dpi=120)
@@ -137,6 +197,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="Figures from results: amplitude and thrust versus frequency from a sweep, "
         "histories (and flow slices) from a run.",
     )
+    add_version(parser)
     parser.add_argument("path", help="sweep.csv, results.h5 or a folder holding one")
     parser.add_argument("--output", help="folder for the figures (default: next to the input)")
     args = parser.parse_args(argv)
