@@ -371,7 +371,7 @@ def test_a_sweep_killed_by_sigkill_keeps_its_rows_and_resumes(tmp_path):
     log = open(tmp_path / "killed.log", "w")
     proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 600
-    while not list((out / sweep_cli.ROWS_FOLDER).glob("*.json")):
+    while not (out / "sweep.csv").is_file():  # merged right after the first row is written
         assert proc.poll() is None, (tmp_path / "killed.log").read_text()
         assert time.monotonic() < deadline
         time.sleep(0.2)
@@ -535,3 +535,46 @@ def test_slurm_sweep_script_runs_under_sbatch_and_resumes(slurm, tmp_path):
     text = log.read_text()
     assert job.returncode == 0, job.stderr + text
     assert "2 done before (--resume)" in text and "sweep: point" not in text
+
+
+@pytest.mark.slow
+@pytest.mark.slurm
+def test_slurm_array_script_runs_one_point_per_task_into_one_table(slurm, tmp_path):
+    """sbatch --array=0-1 scripts/slurm_array.sh: each array task runs its own point
+    (fsi-sweep --point $SLURM_ARRAY_TASK_ID) from $SLURM_SUBMIT_DIR, and both rows merge into
+    one sweep.csv; a third task beyond the points fails in one line."""
+    out = tmp_path / "sweep"
+    extra = [str(BEAM), *BEAM_SET, *SHORT_RUN, "--output", str(out)]
+    env = {**slurm, "FREQUENCIES": "2,8", "WAVEFORMS": "sine"}
+    log = tmp_path / "task_%a.log"
+    job = subprocess.run(
+        ["sbatch", "--wait", "--array=0-2", "--time=20", f"--output={log}"]
+        + ["--export=ALL", "scripts/slurm_array.sh", *extra],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    logs = [(tmp_path / f"task_{k}.log").read_text() for k in range(3)]
+    assert job.returncode != 0  # the job array's state: one task failed
+    assert points(table(out)) == [("sine", 2.0), ("sine", 8.0)], logs
+    assert all(r["status"] == "ok" for r in table(out))
+    assert "sweep: 1 points (transient)" in logs[0] and "sweep: 1 points (transient)" in logs[1]
+    assert (
+        logs[2].strip().splitlines()[-1].startswith("error: --point 2: this sweep has points 0..1")
+    )
+
+
+def test_point_selects_one_point_and_frequencies_keep_the_key_range():
+    from fsi_orchestrator.case import CaseError
+    from fsi_orchestrator.case.schema import Waveform
+    from fsi_orchestrator.cli.sweep import parse_frequencies, select_point
+
+    both = [Waveform.SINE, Waveform.SQUARE]
+    assert select_point([1.0, 3.0, 5.0], both, 4) == ([3.0], [Waveform.SQUARE])
+    assert select_point([1.0], both, None) == ([1.0], both)
+    with pytest.raises(CaseError, match=r"--point 6: this sweep has points 0..5"):
+        select_point([1.0, 3.0, 5.0], both, 6)
+    with pytest.raises(CaseError, match=r"--frequencies '1,2000': actuation.frequency_hz must"):
+        parse_frequencies("1,2000")

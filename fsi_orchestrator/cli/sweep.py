@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 from ..case import Case, CaseError
-from ..case.schema import AnalysisKind, FluidModel, Waveform
+from ..case.params import coerce, spec_of
+from ..case.schema import Actuation, AnalysisKind, FluidModel, Waveform
 from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
 from .compose import shell_with_fast_fluid, without_cfd
 from .swimming import SWIMMING_KEYS
@@ -47,6 +48,13 @@ ROWS_FOLDER = "sweep_rows"  # one finished point's row per file
 SWEEP_CASE_FILE = "sweep_case.json"  # what was swept: --resume refuses another case
 # a launcher's task count: Open MPI's mpirun, MPICH/Intel MPI (Hydra, PMI), SLURM's srun step
 LAUNCHER_TASKS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS")
+
+PERIODIC_KEYS = (
+    "tip_amplitude_periodic_m",
+    "tip_amplitude_periodic_uncertainty_m",
+    "mean_thrust_periodic_n",
+    "mean_thrust_periodic_uncertainty_n",
+)
 
 OnRow = Callable[[str, dict, float], None]  # (point name, row, wall seconds)
 
@@ -76,7 +84,30 @@ def parse_frequencies(text: str) -> list[float]:
         raise CaseError(usage) from None
     if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
         raise CaseError(usage)
+    field = next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz")
+    for f in frequencies:  # each point is a case: the key's own range holds
+        try:
+            coerce("actuation.frequency_hz", float(f), float, spec_of(field))
+        except CaseError as err:
+            raise CaseError(f"--frequencies {text!r}: {err}") from None
     return frequencies
+
+
+def select_point(
+    frequencies: list[float], waveforms: list[Waveform], index: int | None
+) -> tuple[list[float], list[Waveform]]:
+    """--point K: only the K-th (0-based) of the sweep's points, waveform by waveform and
+    frequency by frequency (a SLURM array task runs ``--point $SLURM_ARRAY_TASK_ID``)."""
+    if index is None:
+        return frequencies, waveforms
+    points = [(w, f) for w in waveforms for f in frequencies]
+    if not 0 <= index < len(points):
+        raise CaseError(
+            f"--point {index}: this sweep has points 0..{len(points) - 1} "
+            f"({len(waveforms)} waveforms x {len(frequencies)} frequencies); match --array to it"
+        )
+    waveform, frequency = points[index]
+    return [frequency], [waveform]
 
 
 def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
@@ -160,6 +191,12 @@ def linear_sweep(
         if swim is not None and np.all(np.isfinite(h)):
             row.update(swim.row(times, h, f))
             checked += SWIMMING_KEYS
+        # the periodic response itself: no start-up to settle
+        row.update(
+            tip_amplitude_periodic_m=row["tip_amplitude_m"],
+            tip_amplitude_periodic_uncertainty_m=0.0,
+            periodic=True,
+        )
         row["status"] = not_finite_status(row, checked)
         rows.append(row)
         if on_row is not None:
@@ -265,6 +302,10 @@ def transient_sweep(
             ),
             "status": status,
         }
+        # the periodic estimate from the run's per-period sequence (fsi_orchestrator.periodic)
+        for key in PERIODIC_KEYS:
+            row[key] = summary.get(key, nan)
+        row["periodic"] = bool(summary.get("periodic", False))
         # a figure the run gave as NaN fails the point (one it did not give stays NaN: a beam
         # has no thrust)
         row["status"] = not_finite_status(
@@ -572,6 +613,7 @@ def _sweep(args: argparse.Namespace) -> int:
         raise CaseError(
             f"--waveforms {args.waveforms!r}: use sine, square, sine,square or both"
         ) from None
+    frequencies, waveforms = select_point(frequencies, waveforms, args.point)
     output = Path(args.output) if args.output else case.directory / "output" / "sweep"
     start = time.perf_counter()
     points = [point_name(w, f) for w in waveforms for f in frequencies]
@@ -655,6 +697,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "frequency with the case's own fluid (MPI: one frequency per rank)",
     )
     parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
+    parser.add_argument(
+        "--point",
+        type=int,
+        help="run only the K-th point (0-based, waveforms then frequencies): one SLURM array "
+        "task's share (scripts/slurm_array.sh); the rows merge in --output",
+    )
     parser.add_argument(
         "--resume",
         action="store_true",

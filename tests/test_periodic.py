@@ -1,0 +1,92 @@
+"""The periodic state estimated from a run's per-period figures (fsi_orchestrator.periodic):
+exact on a geometric sequence, and bracketing a measured start-up's limit."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from fsi_orchestrator.periodic import estimate, summary_fields
+
+# The main job's scene (default level, iqn-ils-am) continued to 10 periods, docs/coupling.md
+# "The main job run on to its periodic state": tail amplitude (mm) and mean thrust (N) per
+# period; periods 9-10 agree to 0.1 % / 0.2 %.
+AMPLITUDE_MM = [7.770, 7.667, 8.134, 7.643, 7.901, 7.864, 7.789, 7.878, 7.837, 7.846]
+THRUST_N = [
+    0.01382,
+    0.01342,
+    0.01473,
+    0.01292,
+    0.01384,
+    0.01353,
+    0.01323,
+    0.01349,
+    0.01330,
+    0.01333,
+]
+
+
+def test_a_geometric_alternating_sequence_gives_its_limit():
+    """x_k = 7.85 + 0.3 (-0.6)^k: the Aitken limit is exact from three periods."""
+    x = [7.85 + 0.3 * (-0.6) ** k for k in range(4)]
+    found = estimate(x)
+    assert found.value == pytest.approx(7.85, rel=1e-12)
+    assert found.periods == 4 and found.uncertainty == pytest.approx(abs(x[-1] - x[-2]))
+
+
+def test_one_period_has_no_uncertainty_bound_and_none_is_not_periodic():
+    one = estimate([0.0123])
+    assert one.value == 0.0123 and math.isinf(one.uncertainty) and not one.is_periodic(0.5)
+    assert estimate([]) is None
+    assert summary_fields({"tip_amplitude": ([], "m")}, 0.01) == {"periodic": False}
+
+
+@pytest.mark.parametrize(("series", "limit"), [(AMPLITUDE_MM, 7.85), (THRUST_N, 0.0133)])
+def test_the_measured_start_up_limit_lies_within_the_estimate_from_period_two_on(series, limit):
+    for n in range(2, len(series) + 1):
+        found = estimate(series[:n])
+        assert abs(found.value - limit) <= found.uncertainty, (n, found)
+
+
+def test_the_summary_says_periodic_once_every_figure_is_known_to_the_tolerance():
+    def fields(n):
+        return summary_fields(
+            {"tip_amplitude": (AMPLITUDE_MM[:n], "mm"), "mean_thrust": (THRUST_N[:n], "n")}, 0.01
+        )
+
+    late, early = fields(10), fields(5)
+    assert late["periodic"] and not early["periodic"]
+    assert late["tip_amplitude_periodic_mm"] == pytest.approx(7.85, abs=0.01)
+    assert late["mean_thrust_periodic_n"] == pytest.approx(0.0133, rel=0.005)
+    assert set(late) == {
+        "tip_amplitude_periodic_mm",
+        "tip_amplitude_periodic_uncertainty_mm",
+        "mean_thrust_periodic_n",
+        "mean_thrust_periodic_uncertainty_n",
+        "periodic",
+    }
+
+
+def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
+    case = Path(__file__).resolve().parents[1] / "cases/fish_vacuum_3Hz"
+    done = subprocess.run(
+        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(case), "--json", "--quiet"]
+        + ["--set", "mesh.level=coarse", "--set", "time.periods=3", "--set", "output.vtk=false"]
+        + ["--output", str(tmp_path / "run")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["windows_per_period"] == 40 and summary["periodic_tolerance"] == 0.01
+    found = estimate(summary["tip_amplitude_per_period_m"])
+    assert summary["tip_amplitude_periodic_m"] == found.value
+    assert summary["tip_amplitude_periodic_uncertainty_m"] == found.uncertainty
+    assert summary["periodic"] == found.is_periodic(0.01)
+    assert "mean_thrust_periodic_n" not in summary  # in vacuum: no thrust per period
