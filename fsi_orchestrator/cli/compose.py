@@ -240,8 +240,8 @@ def learned_jacobian(case: Case, n_nodes: int) -> dict:
         )
     try:
         state = read_checkpoint(path)[0]["coupling"]["accelerator"]
-    except (OSError, KeyError):
-        raise CaseError(f"{where} holds no coupled run's checkpoint") from None
+    except (OSError, KeyError, ValueError, RuntimeError):  # ValueError: checksum, NaN
+        raise CaseError(f"{where} holds no coupled run's checkpoint, or a damaged one") from None
     if "imvj_jacobian" not in state:
         raise CaseError(
             f'{where} holds no quasi-Newton Jacobian (that run\'s scheme was not "iqn-ils-am")'
