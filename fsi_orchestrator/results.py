@@ -99,12 +99,12 @@ def _quiet_hooks(on: bool) -> None:
 
 @contextlib.contextmanager
 def _quiet_h5py_failures():
+    """Around a write: the objects of a failed one are freed inside (where HDF5 itself
+    failed, _end_without_hdf5_teardown keeps the hooks quiet for good)."""
     _quiet_hooks(True)
     try:
         yield
-    except BaseException:
-        raise  # the failed write's objects may be freed later: they stay quiet
-    else:
+    finally:
         _quiet_hooks(False)
 
 
@@ -131,6 +131,8 @@ def check_writable(directory: Path, names: tuple[str, ...] = (RESULTS_FILE, CHEC
     targets = [directory / n for n in names if (directory / n).exists()]
     try:
         _probe_write(directory)
+        if (directory / "vtk").is_dir():  # an earlier run's VTU/PVD series
+            _probe_write(directory / "vtk")
         for path in targets:
             os.close(os.open(path, os.O_WRONLY | os.O_APPEND))
     except OSError as err:

@@ -3,6 +3,9 @@ holds a run (no silent overwrite), and a run's results checked and labelled at i
 
 from __future__ import annotations
 
+import errno
+import os
+import shutil
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -12,7 +15,13 @@ import numpy as np
 
 from ..case import CaseError
 from ..loop import ResumeError
-from ..results import CHECKPOINT_FILE, RESULTS_FILE, check_writable
+from ..results import (
+    CHECKPOINT_FILE,
+    MIN_FREE_BYTES,
+    RESULTS_FILE,
+    check_writable,
+    write_failure,
+)
 
 
 def prepare_output(output: Path, resume: bool, overwrite: bool) -> None:
@@ -73,6 +82,12 @@ def check_finite(results: Path, summary: Mapping[str, Any]) -> None:
 
 def label_results(results: Path, attributes: Mapping[str, Any]) -> None:
     """Root attributes known only at a run's end (e.g. ``thrust_source``)."""
-    with h5py.File(results, "a", locking=False) as h5:
-        for key, value in attributes.items():
-            h5.attrs[key] = value
+    kept = f"the results are kept, without {', '.join(attributes)}"
+    try:
+        if shutil.disk_usage(results.parent).free < MIN_FREE_BYTES:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        with h5py.File(results, "a", locking=False) as h5:
+            for key, value in attributes.items():
+                h5.attrs[key] = value
+    except OSError as err:
+        raise write_failure(results, err, kept, then="--resume adds it") from None
