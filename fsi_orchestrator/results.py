@@ -137,10 +137,10 @@ def check_writable(directory: Path, names: tuple[str, ...] = (RESULTS_FILE, CHEC
             os.close(os.open(path, os.O_WRONLY | os.O_APPEND))
     except OSError as err:
         where = Path(err.filename) if err.filename else directory
-        raise write_failure(where, err, "nothing was run") from None
+        raise write_failure(where, err, "nothing was run", then="run again") from None
     if shutil.disk_usage(directory).free < MIN_FREE_BYTES:
         err = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        raise write_failure(directory, err, "nothing was run") from None
+        raise write_failure(directory, err, "nothing was run", then="run again") from None
 
 
 # the least free space a run starts with (a results file's first windows, a checkpoint)
@@ -207,7 +207,7 @@ class ResultsFile:
                 self.h5 = h5py.File(path, "w", locking=False)
             except OSError as err:
                 path.unlink(missing_ok=True)  # no empty results file left behind
-                raise write_failure(path, err, "nothing was run") from None
+                raise write_failure(path, err, "nothing was run", then="run again") from None
             self.rows = 0
         else:
             self.h5 = h5py.File(path, "a", locking=False)
