@@ -56,7 +56,8 @@ class OutputSettings:
     case_identity: str | None = None
 
 
-ProgressFn = Callable[[int, int], None]
+# (windows done, windows in all, the window's results row)
+ProgressFn = Callable[[int, int, dict], None]
 # may end a run before its last window: (the results so far) -> why, or None to go on
 StopRule = Callable[[ResultsFile], str | None]
 
@@ -72,9 +73,12 @@ class WindowLoop:
         progress: ProgressFn | None = None,
         coupling: Coupling | None = None,
         stop: StopRule | None = None,
+        interrupted: Callable[[], bool] | None = None,
     ) -> None:
         self.solid, self.schedule, self.output = solid, schedule, output
-        self.progress = progress or (lambda done, total: None)
+        self.progress = progress or (lambda done, total, row: None)
+        # asked to stop (SIGTERM): end after the running window, with a checkpoint
+        self.interrupted = interrupted or (lambda: False)
         self.coupling = coupling
         self.stop = stop or (lambda results: None)
         self.stopped: str | None = None  # why the run ended before its last window
@@ -115,15 +119,22 @@ class WindowLoop:
                 start = wallclock.perf_counter()
                 stats = self._solve_window()
                 self.window += 1
-                self._record(results, vtk, wallclock.perf_counter() - start, stats)
+                row = self._record(results, vtk, wallclock.perf_counter() - start, stats)
                 self.stopped = self.stop(results)
+                interrupted = self.interrupted()
                 if (
                     self.window % self.output.checkpoint_every == 0
                     or self.window == self.schedule.n_windows
                     or self.stopped is not None
+                    or interrupted
                 ):
                     self._checkpoint(out / CHECKPOINT_FILE)
-                self.progress(self.window, self.schedule.n_windows)
+                self.progress(self.window, self.schedule.n_windows, row)
+                if interrupted:
+                    raise KeyboardInterrupt(
+                        f"stopped after window {self.window} (SIGTERM) with a checkpoint there; "
+                        "continue with --resume"
+                    )
         except OSError as err:  # a VTU, PVD or flow file that could not be written
             if not is_write_fault(err):
                 raise
@@ -141,7 +152,7 @@ class WindowLoop:
         vtk: dict[str, VtkSeries],
         wall_s: float,
         stats: dict[str, float],
-    ) -> None:
+    ) -> dict[str, object]:
         row: dict[str, object] = {"time_s": self.solid.time, "wall_s": wall_s, **stats}
         for name, p in self.participants.items():
             monitor = getattr(p, "monitor", None)
@@ -160,6 +171,7 @@ class WindowLoop:
 
         if self.output.flow_every and self.window % self.output.flow_every == 0:
             self._write_flow_fields()
+        return row
 
     def _write_flow_fields(self) -> None:
         """Flow fields a fluid writes itself (e.g. OpenFOAM's slices), moved into the PVD

@@ -92,9 +92,30 @@ def rayleigh_damping(case: Case, model: ShellModel) -> RayleighDamping | None:
     return RayleighDamping(a, b) if (a or b) else None
 
 
+def structural_damping(case: Case, model: ShellModel) -> RayleighDamping | None:
+    """material.loss_factor in a transient: eta K / omega, exact (zeta = eta / 2) at omega.
+    omega is the drive's, or the first (wet) bending mode's when the drive is below it: there
+    a square wave's harmonics ring that mode, and the quasi-static part hardly feels damping."""
+    eta = case.material.loss_factor
+    if not eta:
+        return None
+    omega = 2 * np.pi * case.actuation.frequency_hz
+    first = 2 * np.pi * bending_frequencies(model, 1)[0]
+    return RayleighDamping(0.0, eta / max(omega, first))
+
+
 def build_damping(case: Case, model: ShellModel):
-    """Rayleigh damping plus the fast fluid's damping the model carries, or None."""
-    parts = [d for d in (rayleigh_damping(case, model), model.fluid_damping) if d is not None]
+    """Rayleigh damping, the structure's loss factor and the fast fluid's damping the model
+    carries, or None."""
+    parts = [
+        d
+        for d in (
+            rayleigh_damping(case, model),
+            structural_damping(case, model),
+            model.fluid_damping,
+        )
+        if d is not None
+    ]
     if not parts:
         return None
     return parts[0] if len(parts) == 1 else CombinedDamping(tuple(parts))
@@ -174,6 +195,7 @@ def mean_voltage_modal_sweep(
         modes,
         rayleigh_coefficients(case, model),
         stiffness=mean_voltage_tangent(model, x_static, drive),
+        loss_factor=case.material.loss_factor,
     )
 
 

@@ -186,6 +186,7 @@ class ModalSweep:
     zetas: NDArray  # (m,)
     static: NDArray  # K^-1 F (ndof,)
     modal_load: NDArray  # phi_j . F
+    loss_factor: float = 0.0  # structural (hysteretic): w_j^2 (1 + i eta)
 
     @classmethod
     def build(
@@ -195,6 +196,7 @@ class ModalSweep:
         n_modes: int,
         rayleigh: tuple[float, float] = (0.0, 0.0),
         stiffness: sp.spmatrix | None = None,
+        loss_factor: float = 0.0,
     ) -> ModalSweep:
         """``stiffness``: the tangent to oscillate about (mean_voltage_tangent; default the
         unloaded plate's)."""
@@ -220,16 +222,21 @@ class ModalSweep:
             zetas=alpha / (2 * omegas) + beta * omegas / 2,
             static=static,
             modal_load=result.shapes @ load,
+            loss_factor=loss_factor,
         )
 
     def response(self, omega: float, modal_damping: NDArray | None = None) -> NDArray:
         """``modal_damping``: a damping beyond Rayleigh's in modal coordinates, phi^T C phi
         (m x m, it couples the modes), e.g. the fluid's edge drag linearized."""
         wj = self.omegas
+        stiffness = wj**2 * (1 + 1j * self.loss_factor)
         if modal_damping is None:
-            dynamic = 1.0 / (wj**2 - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
+            dynamic = 1.0 / (stiffness - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
             return self.static + (self.modal_load * dynamic) @ self.shapes
-        A = np.diag(wj**2 - omega**2 + 2j * self.zetas * wj * omega) + 1j * omega * modal_damping
+        A = (
+            np.diag(stiffness - omega**2 + 2j * self.zetas * wj * omega)
+            + 1j * omega * modal_damping
+        )
         q = np.linalg.solve(A, self.modal_load) - self.modal_load / wj**2
         return self.static + q @ self.shapes
 

@@ -153,8 +153,9 @@ def guarded(body: Callable[[], int]) -> int:
     except (SolverError, ResumeError, RuntimeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_FAILED
-    except KeyboardInterrupt:
-        print("interrupted: results so far are kept; continue with --resume", file=sys.stderr)
+    except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
+        why = str(err) or "results so far are kept; continue with --resume"
+        print(f"interrupted: {why}", file=sys.stderr)
         return EXIT_INTERRUPTED
 
 

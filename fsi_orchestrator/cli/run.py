@@ -7,7 +7,6 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
-from contextlib import contextmanager
 from itertools import pairwise
 from pathlib import Path
 
@@ -18,6 +17,7 @@ from ..case import Case
 from ..case.schema import AnalysisKind, FluidModel
 from ..case.timing import case_schedule, windows_per_period
 from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
+from ..periodic import summary_fields as periodic_fields
 from ..provenance import case_identity, run_attributes
 from ..results import ResultsFile
 from .common import EXIT_OK, base_parser, emit, load, run_main
@@ -30,32 +30,13 @@ from .compose import (
 )
 from .modal import modal_summary
 from .outputs import check_finite, label_results, prepare_output
+from .progress import RunProgress, StopRequest
 from .swimming import swimming_summary
 
 
 def schedule_of(case: Case) -> Schedule:
     dt, n_windows = case_schedule(case)
     return Schedule(dt=dt, n_windows=n_windows)
-
-
-@contextmanager
-def progress_bar(total: int, enabled: bool):
-    if not enabled:
-        yield lambda done, total: None
-        return
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    with Progress(
-        TextColumn("windows"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total}"),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        transient=True,
-    ) as bar:
-        task = bar.add_task("run", total=total)
-        yield lambda done, total: bar.update(task, completed=done)
 
 
 # a start-up still settling: the tail amplitude changed by more than this over the last period
@@ -149,18 +130,31 @@ def dynamic_summary(case: Case, results_path: Path) -> dict:
     }
 
 
+def timed_factory(factory, progress: RunProgress):
+    """The fluid's set-up (meshing, case files) announced with its duration."""
+
+    def build(case: Case, solid):
+        with progress.phase(f"set-up: {case.fluid.model.value} fluid (mesh, case files)"):
+            return factory(case, solid)
+
+    return build
+
+
 def run_dynamic(
     case: Case, output: Path, resume: bool, show_progress: bool, overrides: Sequence[str] = ()
 ) -> dict:
     set_up = time.perf_counter()
     provenance = run_attributes(case, overrides)  # the case as given, before a start's changes
     identity = case_identity(case)
+    progress = RunProgress(show_progress, hold=True)
     start_note = None
     if is_coupled(case):
         factory = None
         if case.fluid.model is FluidModel.OPENFOAM:
             factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume)
-        run = build_coupled_run(case, factory, resume=resume)
+            factory = timed_factory(factory, progress)
+        with progress.phase("set-up: structure, start and coupling"):
+            run = build_coupled_run(case, factory, resume=resume)
         case, solid, coupling, start_note = run.case, run.solid, run.coupling, run.start_note
         if start_note is not None:
             print(start_note, file=sys.stderr)
@@ -168,8 +162,12 @@ def run_dynamic(
     else:
         from solid_adapter.build import build_shell_participant
 
-        model, added = shell_with_fast_fluid(case)
-        solid, coupling = build_shell_participant(case, model), None
+        fluid = (
+            "" if case.fluid.model is FluidModel.NONE else f" and {case.fluid.model.value} fluid"
+        )
+        with progress.phase(f"set-up: structure{fluid}"):
+            model, added = shell_with_fast_fluid(case)
+            solid, coupling = build_shell_participant(case, model), None
     schedule = schedule_of(case)
     settings = OutputSettings(
         directory=output,
@@ -181,9 +179,17 @@ def run_dynamic(
         case_identity=identity,
     )
     start = time.perf_counter()
+    if coupling is not None and coupling.settings.lead_in_windows > 0 and not resume:
+        progress.release()
+        progress.say(
+            f"lead-in: {coupling.settings.lead_in_windows} prescribed-motion fluid windows "
+            "before window 1 (its time counts into window 1)"
+        )
     try:
-        with progress_bar(schedule.n_windows, show_progress) as progress:
-            loop = WindowLoop(solid, schedule, settings, progress, coupling, periodic_stop(case))
+        with progress.windows(schedule.n_windows) as on_window, StopRequest().on_sigterm() as stop:
+            loop = WindowLoop(
+                solid, schedule, settings, on_window, coupling, periodic_stop(case), stop.__bool__
+            )
             path = loop.run(resume=resume)
     finally:
         if coupling is not None:
@@ -216,10 +222,30 @@ def run_dynamic(
     if loop.stopped is not None:
         summary["stopped_periodic"] = loop.stopped
         print(f"note: {loop.stopped}", file=sys.stderr)
+    summary.update(periodic_summary(case, summary))
     note = settling_note(summary)
     if note is not None:
         print(note, file=sys.stderr)
     return summary
+
+
+# a run's figures count as periodic when known to this (relative), unless
+# time.periodic_tolerance says otherwise
+PERIODIC_TOLERANCE = 0.01
+
+
+def periodic_summary(case: Case, summary: dict) -> dict:
+    """The periodic state estimated from the per-period figures (fsi_orchestrator.periodic),
+    with uncertainties and whether it is known to the tolerance."""
+    per_period = {"tip_amplitude": (summary["tip_amplitude_per_period_m"], "m")}
+    if "mean_thrust_per_period_n" in summary:
+        per_period["mean_thrust"] = (summary["mean_thrust_per_period_n"], "n")
+    tolerance = case.time.periodic_tolerance or PERIODIC_TOLERANCE
+    return {
+        **periodic_fields(per_period, tolerance),
+        "periodic_tolerance": tolerance,
+        "windows_per_period": windows_per_period(case),
+    }
 
 
 def settling_note(summary: dict) -> str | None:
@@ -361,7 +387,7 @@ def _body(args: argparse.Namespace) -> int:
     output = Path(args.output) if args.output else case.directory / "output"
     kind = case.analysis.kind
     if kind is AnalysisKind.MODAL:
-        summary = modal_summary(case)
+        summary = modal_summary(case, RunProgress(enabled=not args.quiet))
     elif kind is AnalysisKind.STATIC:
         summary = static_summary(case)
     elif kind is AnalysisKind.SWIMMING:
@@ -387,7 +413,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help="replace the run an existing --output holds (without it, such a folder is refused)",
     )
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--quiet", action="store_true", help="no progress (set-up phases, window lines, bar)"
+    )
     return run_main(_body, parser, argv)
 
 
