@@ -8,7 +8,8 @@ plate velocity samples, reading and integrating the loads, deleting stale folder
 relaunch overhead. Target (issue 4): adapter share <= 5 % for the persistent driver.
 One fluid step per window (``fluid.max_courant = 10``, as the main job): the persistent driver
 never sub-steps, and with the default Courant limit of 2 the relaunched windows did, which
-counted their second step as "relaunch overhead" (1.56 s of it at the default level, docs/openfoam.md).
+counted their second step as "relaunch overhead" (1.56 s of it at the default level,
+docs/openfoam.md).
 With ``--processes 1 4 16`` each level is also run on MPI ranks: speed-up over serial and the
 last window's lateral force against serial's (docs/openfoam.md, "Parallel scaling").
 

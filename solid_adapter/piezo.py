@@ -42,9 +42,7 @@ class DriveSignal:
     @property
     def mean(self) -> NDArray:
         """[V_left, V_right] of the mean the laminate holds (mean_transfer of the drive's)."""
-        return self.mean_transfer * np.array(
-            [sum(self.left_volts) / 2, sum(self.right_volts) / 2]
-        )
+        return self.mean_transfer * np.array([sum(self.left_volts) / 2, sum(self.right_volts) / 2])
 
     def shape(self, t: float) -> float:
         """Unit waveform in [-1, 1]: sin(2 pi f t) or its sign."""
