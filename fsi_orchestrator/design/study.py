@@ -98,7 +98,7 @@ class Parameter:
     def value(self, unit: float) -> float | int:
         """The parameter at ``unit`` in [0, 1] of its range."""
         v = self.low + unit * (self.high - self.low)
-        return round(v) if self.integer else float(v)
+        return round(v) if self.integer else float(f"{v:.12g}")  # 0.021, not 0.0209999...
 
 
 @dataclass(frozen=True, kw_only=True)
