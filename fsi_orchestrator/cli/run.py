@@ -354,11 +354,17 @@ def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
     """Slender-body (Lighthill, eq. 5-12, fixed head) mean thrust over the last period."""
     from fluid_adapter.slender_body import mean_thrust_from_shell
 
-    if case.time.step_s is not None or case.time.periods < 1:
+    if case.time.step_s is not None:
         return {}
     with h5py.File(results_path, "r") as h5:
         t = h5["time_s"][:, 0]
         midline = h5["shell/midline_z_m"][:]
+    period = 1.0 / case.actuation.frequency_hz
+    partial = len(t) < windows_per_period(case)  # a run shorter than a period: its mean
+    if partial:
+        if len(t) < 2:
+            return {}
+        period = len(t) * float(t[1] - t[0])
     xs = solid.midline_x_m
     thrust = mean_thrust_from_shell(
         xs,
@@ -366,10 +372,11 @@ def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
         t,
         midline,
         density_kg_m3=case.fluid.density_kg_m3,
-        period_s=1.0 / case.actuation.frequency_hz,
+        period_s=period,
         added_mass_coefficient=case.fluid.added_mass_coefficient,
     )
-    return {"slender_body_mean_thrust_n": thrust}
+    averaged = {"thrust_averaged_over_s": period} if partial else {}
+    return {"slender_body_mean_thrust_n": thrust, **averaged}
 
 
 def static_summary(case: Case) -> dict:
@@ -382,22 +389,32 @@ def static_summary(case: Case) -> dict:
     }
 
 
+def execute(
+    case: Case,
+    output: Path,
+    resume: bool,
+    overwrite: bool,
+    show_progress: bool,
+    overrides: Sequence[str] = (),
+) -> dict:
+    """Run a case of any analysis kind; its summary (fsi-run, fsi_orchestrator.run)."""
+    kind = case.analysis.kind
+    if kind is AnalysisKind.MODAL:
+        return modal_summary(case, RunProgress(enabled=show_progress))
+    if kind is AnalysisKind.STATIC:
+        return static_summary(case)
+    if kind is AnalysisKind.SWIMMING:
+        return swimming_summary(case)
+    prepare_output(output, resume, overwrite)
+    summary = run_dynamic(case, output, resume, show_progress=show_progress, overrides=overrides)
+    check_finite(Path(summary["results"]), summary)
+    return summary
+
+
 def _body(args: argparse.Namespace) -> int:
     case = load(args)
     output = Path(args.output) if args.output else case.directory / "output"
-    kind = case.analysis.kind
-    if kind is AnalysisKind.MODAL:
-        summary = modal_summary(case, RunProgress(enabled=not args.quiet))
-    elif kind is AnalysisKind.STATIC:
-        summary = static_summary(case)
-    elif kind is AnalysisKind.SWIMMING:
-        summary = swimming_summary(case)
-    else:
-        prepare_output(output, args.resume, args.overwrite)
-        summary = run_dynamic(
-            case, output, args.resume, show_progress=not args.quiet, overrides=args.overrides
-        )
-        check_finite(Path(summary["results"]), summary)
+    summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
     return EXIT_OK
 
