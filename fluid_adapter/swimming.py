@@ -70,6 +70,10 @@ MAX_SPEED_M_S = 50.0  # no root below this: the motion or the drag is not physic
 MAX_SLIP_RAD = 0.5
 
 
+class SwimmingError(RuntimeError):
+    """No balance: the thrust exceeds any drag, or no yaw damping balances the drive."""
+
+
 def skin_friction_coefficient(reynolds: float, line: str = "ittc-1957") -> float:
     """Mean skin-friction coefficient of a flat plate at Re = V L / nu."""
     if line not in SKIN_FRICTION_LINES:
@@ -132,7 +136,7 @@ def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:
     while thrust(upper) - drag(upper) > 0:
         upper *= 2
         if upper > MAX_SPEED_M_S:
-            raise ValueError(
+            raise SwimmingError(
                 f"the mean thrust exceeds the drag up to {MAX_SPEED_M_S:g} m/s: no "
                 "self-propelled speed (is the motion finite?)"
             )
@@ -239,6 +243,6 @@ def turning_rate(x, half_height, h, dt_s, **load) -> Turning:
     while moment(step) * drive > 0:
         step *= 2
         if abs(step) > 1e3:
-            raise ValueError("no yaw damping balances the drive's yaw moment")
+            raise SwimmingError("no yaw damping balances the drive's yaw moment")
     rate = brentq(moment, 0.0, step, xtol=1e-12, rtol=1e-12)
     return Turning(yaw_rate_rad_s=rate, slip_rad=slip_of(rate), drive_moment_nm=drive)
