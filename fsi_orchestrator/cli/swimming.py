@@ -87,6 +87,8 @@ class SwimmingModel:
             "turning_rate_deg_s": float(np.degrees(turn.yaw_rate_rad_s)),
             "thrust_at_speed_n": thrust,
             "drag_at_speed_n": float(sum(drag.values())),
+            # 0 at the self-propelled speed; at a prescribed speed, what a flume's balance reads
+            "net_force_n": thrust - float(sum(drag.values())),
             **{f"{name}_drag_n": value for name, value in drag.items()},
             "reynolds_number": speed * length / self.drag.kinematic_viscosity_m2_s,
             "slip_deg": float(np.degrees(turn.slip_rad)),
