@@ -29,10 +29,16 @@ STUDY_FILE = "study.toml"
 # fluid_force_summary, thrust_estimate) and of a modal case (cli/modal.py) that are numbers
 SCALAR_SUMMARY_KEYS = (
     "tip_amplitude_m",
+    "tip_amplitude_periodic_m",  # the periodic state estimated from the periods run
+    "tip_amplitude_periodic_uncertainty_m",
+    "mean_thrust_periodic_n",
+    "mean_thrust_periodic_uncertainty_n",
     "tip_amplitude_change_last_period",
     "tip_max_abs_m",
     "end_time_s",
     "windows",
+    "windows_per_period",
+    "thrust_averaged_over_s",
     "mean_newton_iterations_per_window",
     "wall_s",
     "setup_s",
