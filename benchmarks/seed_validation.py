@@ -281,6 +281,7 @@ def sensitivity(fast: FastModel, w: float, length: float) -> list[dict]:
         ),
         ("held length +5 mm", [f"boundary.clamp_length_m={float(length) + 5e-3!r}"], [], []),
         ("no edge drag (potential flow only)", ["fluid.edge_drag=false"], [], []),
+        ("structural loss factor x2 (0.026)", ["material.loss_factor=0.026"], [], []),
         ("drive model seed-stress", [], ["actuation.drive_model=seed-stress"], []),
         (
             "peduncle 10 mm further back (planform)",

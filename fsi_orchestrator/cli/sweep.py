@@ -164,7 +164,7 @@ def linear_sweep(
         drive = DriveSignal.from_case(with_drive(case, f, waveform))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if case.fluid.edge_drag:  # the fluid's damping at this drive frequency
-                drag = edge_drag(model, case.fluid.density_kg_m3, f, all_harmonics=swim is not None)
+                drag = edge_drag(model, case.fluid.density_kg_m3, f)
                 response = damped_sweep_response(sweep, drive, x_static, drag, model, tip * 5 + 2)
             else:
                 response = sweep_response(sweep, drive, x_static)
