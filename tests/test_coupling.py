@@ -215,7 +215,7 @@ def test_a_warm_started_run_reruns_in_its_own_folder_and_resumes_without_the_sou
         return json.loads(done.stdout)
 
     assert "jacobian_from" not in fsi_run("output", 0.5)
-    fsi_run("output", 0.5, "--set", "coupling.jacobian_from=output")
+    fsi_run("output", 0.5, "--set", "coupling.jacobian_from=output", "--overwrite")
     warm = fsi_run("warm", 0.5, "--set", "coupling.jacobian_from=output")
     assert warm["jacobian_from"] == str(tmp_path / "output" / "checkpoint.h5")  # provenance
     (tmp_path / "output").rename(tmp_path / "gone")
@@ -275,7 +275,7 @@ def test_a_resume_that_does_not_fit_the_case_is_refused_in_one_line(tmp_path):
     checkpoint, results = (tmp_path / "output" / f for f in ("checkpoint.h5", "results.h5"))
     before = results.read_bytes()
     for extra, expected in (
-        (["--set", "mesh.level=default"], f"{checkpoint}: does not fit this case ("),
+        (["--set", "mesh.level=default"], f"{checkpoint}: belongs to another case (mesh.level"),
         (
             ["--set", "actuation.frequency_hz=4"],
             f"{checkpoint}: was written with windows of 0.01 s, this case has 0.0125 s",

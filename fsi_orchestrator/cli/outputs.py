@@ -24,10 +24,11 @@ from ..results import (
 )
 
 
-def prepare_output(output: Path, resume: bool, overwrite: bool) -> None:
+def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
     """Before the set-up's seconds: a folder that cannot be written, a --resume without a
     checkpoint, and a folder holding an earlier run (without --resume or --overwrite) each
-    fail at once in one line."""
+    fail at once in one line. True when an earlier run is to be replaced (--overwrite): its
+    checkpoint goes once the set-up is done (coupling.jacobian_from may still read it)."""
     try:
         output.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -42,8 +43,7 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> None:
             "--resume, write elsewhere with --output, or replace it with --overwrite"
         )
     check_writable(output)
-    if held and not resume:  # --overwrite: a later --resume must not find the old checkpoint
-        checkpoint.unlink(missing_ok=True)
+    return bool(held) and not resume
 
 
 # the recorded quantities a run's figures come from; coupling statistics may be NaN ("none")

@@ -19,7 +19,7 @@ from ..case.timing import case_schedule, windows_per_period
 from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
 from ..periodic import summary_fields as periodic_fields
 from ..provenance import case_identity, run_attributes
-from ..results import ResultsFile
+from ..results import CHECKPOINT_FILE, ResultsFile
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,
@@ -141,7 +141,12 @@ def timed_factory(factory, progress: RunProgress):
 
 
 def run_dynamic(
-    case: Case, output: Path, resume: bool, show_progress: bool, overrides: Sequence[str] = ()
+    case: Case,
+    output: Path,
+    resume: bool,
+    show_progress: bool,
+    overrides: Sequence[str] = (),
+    replaces_run: bool = False,
 ) -> dict:
     set_up = time.perf_counter()
     provenance = run_attributes(case, overrides)  # the case as given, before a start's changes
@@ -178,6 +183,8 @@ def run_dynamic(
         attributes={**provenance, "dt_s": schedule.dt},
         case_identity=identity,
     )
+    if replaces_run:  # --overwrite: a later --resume must not find the old checkpoint
+        (output / CHECKPOINT_FILE).unlink(missing_ok=True)
     start = time.perf_counter()
     if coupling is not None and coupling.settings.lead_in_windows > 0 and not resume:
         progress.release()
@@ -362,7 +369,7 @@ def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
     period = 1.0 / case.actuation.frequency_hz
     partial = len(t) < windows_per_period(case)  # a run shorter than a period: its mean
     if partial:
-        if len(t) < 2:
+        if len(t) < 4:  # the thrust needs time derivatives: at least 4 samples
             return {}
         period = len(t) * float(t[1] - t[0])
     xs = solid.midline_x_m
@@ -405,8 +412,10 @@ def execute(
         return static_summary(case)
     if kind is AnalysisKind.SWIMMING:
         return swimming_summary(case)
-    prepare_output(output, resume, overwrite)
-    summary = run_dynamic(case, output, resume, show_progress=show_progress, overrides=overrides)
+    replaces = prepare_output(output, resume, overwrite)
+    summary = run_dynamic(
+        case, output, resume, show_progress, overrides=overrides, replaces_run=replaces
+    )
     check_finite(Path(summary["results"]), summary)
     return summary
 
