@@ -19,7 +19,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
 import re
 import time
 import tomllib
@@ -32,6 +31,7 @@ import numpy as np
 from ..case import Case, CaseError
 from ..case.loader import CASE_FILE, case_from_dict, merge_overrides
 from ..case.schema import AnalysisKind, FluidModel, GeometryKind
+from ..cli.sweep import atomic_write  # one atomic writer for every table and record
 from .study import (
     _INDEXED,
     LINEAR_QUANTITIES,
@@ -305,16 +305,6 @@ def jsonable(value: Any) -> Any:
     if isinstance(value, list):
         return [jsonable(v) for v in value]
     return value
-
-
-def atomic_write(path: Path, text: str) -> None:
-    """Replace ``path`` at once: a reader, or a kill, never meets half a file."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", newline="") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
 
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
