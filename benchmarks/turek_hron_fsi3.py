@@ -34,7 +34,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fluid_adapter.openfoam.turek_fsi import FSI3, build_fluid, generate_fsi_case  # noqa: E402
-from fsi_orchestrator.case.schema import TimeScheme  # noqa: E402
+from fsi_orchestrator.case.schema import CouplingScheme, TimeScheme  # noqa: E402
 from fsi_orchestrator.cli.turek_hron import FsiHistory, flag_participant, run_coupled  # noqa: E402
 from fsi_orchestrator.coupling import CouplingSettings  # noqa: E402
 
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     fluid = build_fluid(args.workdir / "fsi", settings, args.dt, n_windows)
     solid = flag_participant(FSI3, static=False, elements=(40, 4))
     coupling = CouplingSettings(
-        scheme=args.scheme,
+        scheme=CouplingScheme(args.scheme),
         relaxation=0.5,
         tolerance_rel=args.tolerance,
         max_iterations=30,

@@ -35,7 +35,8 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import NDArray
 
-from .acceleration import make_acceleration
+from .acceleration import Acceleration, make_acceleration
+from .case.schema import CouplingScheme
 from .convergence import (
     ConvergenceCriteria,
     CouplingDivergenceError,
@@ -64,8 +65,6 @@ from .start_orbit import (
 FIELD = "force"
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
-ITERATIVE = {"constant", "aitken", "iqn-ils", "iqn-imvj", "iqn-ils-am"}
-ADDED_MASS = {"iqn-ils-am", "explicit-am"}
 PAST_WINDOWS = 4  # lead-in displacements handed on (a BDF2-of-BDF2 stencil needs 3)
 LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-in period
 # ... and its largest speed: near the wet torsion modes (22-25 Hz for the clamped fish) the
@@ -76,7 +75,7 @@ LEAD_IN_MAX_SPEED_M_S = 2.0
 
 @dataclass(frozen=True, kw_only=True)
 class CouplingSettings:
-    scheme: str
+    scheme: CouplingScheme
     relaxation: float = 0.5
     tolerance_rel: float = 1e-4
     max_iterations: int = 50
@@ -99,7 +98,7 @@ class CouplingSettings:
 
     @property
     def implicit(self) -> bool:
-        return self.scheme in ITERATIVE
+        return self.scheme.iterates
 
     def iterates(self, window: int) -> bool:
         """Whether ``window`` is iterated to convergence."""
@@ -107,22 +106,19 @@ class CouplingSettings:
 
     @property
     def uses_added_mass(self) -> bool:
-        return self.scheme in ADDED_MASS
+        return self.scheme.uses_added_mass
 
 
-def _make_accelerator(settings: CouplingSettings):
-    # keeps all past windows in a Jacobian (IMVJ); "iqn-imvj" without the added-mass
-    # preconditioning is for participants without a fast fluid model (the Turek & Hron flag)
-    if settings.scheme in ("iqn-ils-am", "iqn-imvj"):
-        return make_acceleration("iqn-imvj", initial_relaxation=settings.relaxation)
-    if settings.scheme == "constant":
-        return make_acceleration("constant", relaxation=settings.relaxation)
-    if settings.scheme == "aitken":
-        return make_acceleration("aitken", initial_relaxation=settings.relaxation)
-    if settings.scheme == "iqn-ils":
+def _make_accelerator(settings: CouplingSettings) -> Acceleration | None:
+    name = settings.scheme.accelerator
+    if name == "constant":
+        return make_acceleration(name, relaxation=settings.relaxation)
+    if name == "iqn-ils":
         return make_acceleration(
-            "iqn-ils", initial_relaxation=settings.relaxation, reuse_windows=settings.reuse_windows
+            name, initial_relaxation=settings.relaxation, reuse_windows=settings.reuse_windows
         )
+    if name is not None:  # aitken, iqn-imvj
+        return make_acceleration(name, initial_relaxation=settings.relaxation)
     return None
 
 
@@ -167,7 +163,7 @@ class Coupling:
         # per window, the denominator of the coupled / prescribed-motion cost ratio
         self.prescribed_wall_s_per_window: float | None = None
         self.lead_in_wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
-        self.resumed_from_scheme: str | None = None  # a resumed run's former coupling.scheme
+        self.resumed_from_scheme: CouplingScheme | None = None  # a resumed run's former scheme
 
     def _in_fluid(self, call, *args):
         """``call(*args)``, its wall time counted as the fluid's (results.h5
@@ -444,8 +440,8 @@ class Coupling:
         between a plain and an *-am scheme (f against g = f + M~ a exchanged) the predictor and
         the structure's load restart from the last window's value in this scheme's variable."""
         saved = state.get("scheme", str(self.settings.scheme).encode())  # older runs: none
-        saved = saved.decode() if isinstance(saved, bytes) else str(saved)
-        self.resumed_from_scheme = None if saved == self.settings.scheme else saved
+        saved = CouplingScheme(saved.decode() if isinstance(saved, bytes) else str(saved))
+        self.resumed_from_scheme = None if saved is self.settings.scheme else saved
         self.force_scales = [float(v) for v in np.atleast_1d(state["force_scales"])]
         self.norms = [float(v) for v in np.atleast_1d(state["norms"])]
         prescribed = float(state.get("prescribed_wall_s_per_window", np.nan))  # older runs: none
@@ -456,7 +452,7 @@ class Coupling:
         if self.resumed_from_scheme is None:
             if self.accelerator is not None:
                 self.accelerator.load_state(state["accelerator"])
-        elif (saved in ADDED_MASS) != self.settings.uses_added_mass:
+        elif saved.uses_added_mass != self.settings.uses_added_mass:
             self._start_from_fluid_force(solid)  # the history holds the other variable
 
 

@@ -10,7 +10,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import IMPLICIT_SCHEMES, FluidDriver
+from fsi_orchestrator.case.schema import FluidDriver
 from fsi_orchestrator.case.timing import case_schedule
 
 from . import runner
@@ -123,5 +123,5 @@ def build_openfoam_participant(
 def _prelaunch(case: Case, processes: int) -> bool:
     """Start the process a repeated window needs while the window is solved (drivers.py): only
     where windows are repeated (implicit coupling), serial, with a second core for its start-up."""
-    repeats = case.coupling.scheme.value in IMPLICIT_SCHEMES
+    repeats = case.coupling.scheme.iterates
     return repeats and processes == 1 and (os.cpu_count() or 1) >= 2

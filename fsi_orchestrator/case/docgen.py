@@ -11,7 +11,7 @@ import typing
 from enum import Enum
 from pathlib import Path
 
-from .params import spec_of
+from .params import choices, spec_of
 from .schema import SECTIONS
 
 HEADER = """# Case file reference (`case.toml`)
@@ -34,7 +34,7 @@ def _type_name(tp) -> str:
         args = [a for a in typing.get_args(tp) if a is not type(None)]
         return _type_name(args[0])
     if isinstance(tp, type) and issubclass(tp, Enum):
-        return " \\| ".join(f'`"{m.value}"`' for m in tp)
+        return " \\| ".join(f'`"{m.value}"`' for m in choices(tp))
     if origin is tuple:
         return "list of numbers"
     return {float: "number", int: "integer", str: "string", bool: "boolean"}.get(tp, str(tp))

@@ -231,14 +231,14 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
     if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
         raise CaseError(
             f'coupling.jacobian_from applies to coupling.scheme = "iqn-ils-am" only (got '
-            f'"{c.scheme.value}"), whose quasi-Newton update keeps a Jacobian; remove it or '
+            f'"{c.scheme}"), whose quasi-Newton update keeps a Jacobian; remove it or '
             "change the scheme"
         )
     if c.explicit_periods > 0:
-        if c.scheme.value != "iqn-ils-am":
+        if c.scheme is not CouplingScheme.IQN_ILS_AM:
             raise CaseError(
                 f'coupling.explicit_periods applies to coupling.scheme = "iqn-ils-am" only (got '
-                f'"{c.scheme.value}"): one solve per window is stable only with the added-mass '
+                f'"{c.scheme}"): one solve per window is stable only with the added-mass '
                 "correction; set it to 0 or change the scheme"
             )
         if t.step_s is None and c.explicit_periods >= t.periods:

@@ -55,10 +55,16 @@ def spec_of(f: dataclasses.Field) -> ParamSpec:
 # --------------------------------------------------------------------------- type coercion
 
 
+def choices(tp: type[Enum]) -> list[Enum]:
+    """The members of an enum a case file may name: all but those whose ``case_choice``
+    property is false (a scheme set in code only, schema.CouplingScheme.IQN_IMVJ)."""
+    return [m for m in tp if getattr(m, "case_choice", True)]
+
+
 def _describe(tp: Any) -> str:
     origin = typing.get_origin(tp)
     if isinstance(tp, type) and issubclass(tp, Enum):
-        return " | ".join(f'"{m.value}"' for m in tp)
+        return " | ".join(f'"{m.value}"' for m in choices(tp))
     if origin in (typing.Union, types.UnionType):
         return " or ".join(_describe(a) for a in typing.get_args(tp) if a is not type(None))
     if origin is tuple:
@@ -95,10 +101,10 @@ def coerce(key: str, value: Any, tp: Any, spec: ParamSpec) -> Any:
             return None
         return coerce(key, value, args[0], spec)
     if isinstance(tp, type) and issubclass(tp, Enum):
-        try:
-            return tp(value)
-        except ValueError:
-            raise CaseError(f"{key} must be one of {_describe(tp)}, got {_show(value)}") from None
+        member = next((m for m in choices(tp) if m.value == value), None)
+        if member is None:
+            raise CaseError(f"{key} must be one of {_describe(tp)}, got {_show(value)}")
+        return member
     if origin is tuple:
         if not isinstance(value, list | tuple):
             raise CaseError(f"{key} must be a {_describe(tp)}, got {_show(value)}")

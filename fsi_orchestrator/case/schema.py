@@ -128,16 +128,49 @@ class AddedMassModel(StrEnum):
 
 
 class CouplingScheme(StrEnum):
+    """The partitioned coupling scheme: its name in case files and results, and what it does
+    (the properties below)."""
+
     EXPLICIT = "explicit"
     CONSTANT = "constant"
     AITKEN = "aitken"
     IQN_ILS = "iqn-ils"
     IQN_ILS_AM = "iqn-ils-am"
     EXPLICIT_AM = "explicit-am"
+    # IQN-IMVJ without the added-mass preconditioning: for participants without a fast fluid
+    # model (the Turek & Hron flag), set in code; no case-file choice (case_choice)
+    IQN_IMVJ = "iqn-imvj"
+
+    @property
+    def case_choice(self) -> bool:
+        """Whether a case file (or ``--set``) may name this scheme."""
+        return self is not CouplingScheme.IQN_IMVJ
+
+    @property
+    def iterates(self) -> bool:
+        """Whether it solves a window again until it converges (implicit coupling)."""
+        return self.accelerator is not None
+
+    @property
+    def uses_added_mass(self) -> bool:
+        """Whether the fast model's added mass preconditions the exchange (the *-am schemes)."""
+        return self in (CouplingScheme.IQN_ILS_AM, CouplingScheme.EXPLICIT_AM)
+
+    @property
+    def accelerator(self) -> str | None:
+        """The acceleration that proposes each next iterate (fsi_orchestrator.acceleration's
+        scheme name), None for one solve per window. The quasi-Newton *-am and imvj schemes
+        keep all past windows in a multi-vector Jacobian (IMVJ)."""
+        return _ACCELERATORS.get(self)
 
 
-# schemes that solve a window again until it converges
-IMPLICIT_SCHEMES = frozenset({"constant", "aitken", "iqn-ils", "iqn-ils-am"})
+_ACCELERATORS = {
+    CouplingScheme.CONSTANT: "constant",
+    CouplingScheme.AITKEN: "aitken",
+    CouplingScheme.IQN_ILS: "iqn-ils",
+    CouplingScheme.IQN_ILS_AM: "iqn-imvj",
+    CouplingScheme.IQN_IMVJ: "iqn-imvj",
+}
 
 
 @dataclass(frozen=True, kw_only=True)

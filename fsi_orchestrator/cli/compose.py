@@ -65,10 +65,10 @@ def coupling_settings(case: Case):
     c = case.coupling
     relaxation = c.relaxation
     if relaxation is None:  # *-am: the preconditioned map is contractive
-        relaxation = 1.0 if c.scheme.value.endswith("-am") else 0.5
+        relaxation = 1.0 if c.scheme.uses_added_mass else 0.5
     return CouplingSettings(
         **lead_in(case),
-        scheme=c.scheme.value,
+        scheme=c.scheme,
         relaxation=relaxation,
         tolerance_rel=c.tolerance_rel,
         max_iterations=c.max_iterations,

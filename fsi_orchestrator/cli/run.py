@@ -315,12 +315,12 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         )
     start = {}
     if coupling.resumed_from_scheme is not None:
-        start["resumed_from_scheme"] = coupling.resumed_from_scheme
+        start["resumed_from_scheme"] = coupling.resumed_from_scheme.value
     if coupling.start_fit is not None:
         start["start_correction"] = coupling.start_fit.summary(coupling.start_orbit.shape_z)
     return {
         **start,
-        "coupling_scheme": coupling.settings.scheme,
+        "coupling_scheme": coupling.settings.scheme.value,
         "mean_fluid_solves_per_window": float(solves.mean()),
         # the periodic state's cost, after the start-up windows
         "last_period_fluid_solves_per_window": float(solves[last].mean()),

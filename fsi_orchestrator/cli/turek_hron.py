@@ -29,6 +29,7 @@ from fluid_adapter.openfoam.turek_fsi import (
 )
 from solid_adapter.plane_strain import FlagParticipant, build_flag_participant
 
+from ..case.schema import CouplingScheme
 from ..coupling import Coupling, CouplingSettings
 
 
@@ -139,7 +140,7 @@ def run_fsi1(
     fluid = build_fluid(workdir / "fsi", settings, dt, max_windows)
     solid = flag_participant(FSI1, static=True, elements=elements)
     coupling = CouplingSettings(
-        scheme="iqn-ils", relaxation=0.5, tolerance_rel=1e-4, max_iterations=20
+        scheme=CouplingScheme.IQN_ILS, relaxation=0.5, tolerance_rel=1e-4, max_iterations=20
     )
     return run_coupled(
         fluid,
