@@ -20,7 +20,7 @@ motion.
 
     .venv/bin/python benchmarks/seed_validation.py [--json] [--write-docs]
 
-``--write-docs`` replaces the generated part of docs/validation.md. Takes about 10 min on 2
+``--write-docs`` replaces the generated part of docs/validation.md. Takes about 11 min on 2
 cores.
 """
 
@@ -302,17 +302,42 @@ def sensitivity(fast: FastModel, w: float, length: float) -> list[dict]:
     return rows
 
 
+def mesh_convergence(fast: FastModel, w: float) -> list[dict]:
+    """First wet bending mode of the three free robots per shell mesh level, with the columns
+    graded to the outline (the product) and uniform (as before the grading), fluid coarse."""
+    from solid_adapter import mesh as shell_mesh
+
+    spacing = f"actuation.electrode_spacing_m={float(w)!r}"
+    rows = []
+    graded = shell_mesh.GRADING_EXPONENT
+    for label, exponent in (("graded", graded), ("uniform", 0.0)):
+        shell_mesh.GRADING_EXPONENT = exponent
+        try:
+            for level in ("coarse", "default", "fine"):
+                row = {"columns": label, "level": level}
+                for robot, name in CASE_OF.items():
+                    free = case(name, spacing, "boundary.head=free", f"mesh.level={level}")
+                    row[robot] = fast.bending_modes(free, 1)[0]
+                rows.append(row)
+        finally:
+            shell_mesh.GRADING_EXPONENT = graded
+    return rows
+
+
 def _pct(model: float, reference: float) -> str:
     return f"{100 * (model / reference - 1):+.0f} %"
 
 
-def report(cal: dict, pred: dict, sens: list[dict], wall_s: float, evaluations: int) -> str:
+def report(
+    cal: dict, pred: dict, sens: list[dict], conv: list[dict], wall_s: float, evaluations: int
+) -> str:
     lines = [
         START,
         "",
         "Made by `.venv/bin/python benchmarks/seed_validation.py --write-docs` "
         f"({evaluations} model evaluations, {wall_s / 60:.0f} min on 2 cores). Fast model: "
-        "coarse shell, potential flow in the tank (coarse), edge drag fitted to OpenFOAM, the "
+        "default shell level (columns graded to the outline), potential flow in the tank "
+        "(coarse), edge drag fitted to OpenFOAM, the "
         "linear periodic response (fsi-sweep --method linear).",
         "",
         "**Calibration** (original fish only; fitted, then frozen in the cases):",
@@ -384,6 +409,20 @@ def report(cal: dict, pred: dict, sens: list[dict], wall_s: float, evaluations: 
             f"| {row['assumption']} | {fmt.format(row['sine_3hz_mm'])} | "
             f"{fmt.format(row['serial_f1_hz'])} | {fmt.format(row['integrative_f1_hz'])} |"
         )
+    lines += [
+        "",
+        "**Mesh convergence** (first wet bending mode, free, fluid coarse; the shell levels "
+        "have 8 x 2, 16 x 4 and 32 x 8 elements before the columns are split at the layout's "
+        "edges):",
+        "",
+        "| shell columns | level | original [Hz] | serial [Hz] | integrative [Hz] |",
+        "|---|---|---|---|---|",
+    ]
+    for row in conv:
+        lines.append(
+            f"| {row['columns']} | {row['level']} | {row['original']:.2f} | "
+            f"{row['serial']:.2f} | {row['integrative']:.2f} |"
+        )
     lines += ["", END]
     return "\n".join(lines)
 
@@ -410,12 +449,14 @@ def main() -> None:
     print(f"calibrated: {cal}", file=sys.stderr, flush=True)
     pred = predictions(fast, cal["electrode_spacing_m"], cal["clamp_length_m"])
     sens = sensitivity(fast, cal["electrode_spacing_m"], cal["clamp_length_m"])
+    conv = mesh_convergence(fast, cal["electrode_spacing_m"])
     wall = time.perf_counter() - start
-    text = report(cal, pred, sens, wall, fast.evaluations)
+    text = report(cal, pred, sens, conv, wall, fast.evaluations)
     if args.write_docs:
         write_docs(text)
     if args.json:
-        print(json.dumps({"calibration": cal, "predictions": pred, "sensitivity": sens}, indent=1))
+        summary = {"calibration": cal, "predictions": pred, "sensitivity": sens}
+        print(json.dumps({**summary, "mesh_convergence": conv}, indent=1))
     else:
         print(text)
 

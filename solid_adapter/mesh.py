@@ -97,18 +97,36 @@ class PlateMesh:
 
 
 def element_columns(layout: PlateLayout, n_target: int) -> NDArray:
-    """x coordinates of element columns with edges at every layout breakpoint."""
+    """x coordinates of element columns with edges at every layout breakpoint, spaced by the
+    column density ``column_density`` (denser where the outline is narrow)."""
     breaks = np.array(sorted(layout.breakpoints_m))
     keep = np.concatenate([[True], np.diff(breaks) > 1e-9 * layout.length_m])
     breaks = breaks[keep & (breaks <= layout.length_m * (1 + 1e-12))]
     breaks[-1] = layout.length_m
-    lengths = np.diff(breaks)
-    counts = np.maximum(1, np.round(n_target * lengths / layout.length_m)).astype(int)
+    xf = np.unique(np.concatenate([breaks, np.linspace(0.0, layout.length_m, 2001)]))
+    rho = column_density(layout, xf)
+    mass = np.concatenate([[0.0], np.cumsum(np.diff(xf) * (rho[1:] + rho[:-1]) / 2)])
+    at_breaks = np.interp(breaks, xf, mass)
+    counts = np.maximum(1, np.round(n_target * np.diff(at_breaks) / mass[-1])).astype(int)
     xs = [
-        np.linspace(a, b, n + 1)[:-1]
-        for a, b, n in zip(breaks[:-1], breaks[1:], counts, strict=True)
+        np.interp(np.linspace(m0, m1, n + 1)[:-1], mass, xf)
+        for m0, m1, n in zip(at_breaks[:-1], at_breaks[1:], counts, strict=True)
     ]
     return np.concatenate(xs + [breaks[-1:]])
+
+
+GRADING_EXPONENT = 1.0
+
+
+def column_density(layout: PlateLayout, x: NDArray) -> NDArray:
+    """Relative density of element columns along x: (h_max / h(x)) ** GRADING_EXPONENT.
+
+    A plate's bending stiffness goes with its local height, so a narrow waist (a 3 mm caudal
+    peduncle between a 64 mm body and a 60 mm fin) concentrates the curvature where a uniform
+    column spacing puts one element across the whole taper; a constant height gives uniform
+    columns."""
+    h = np.maximum(layout.height(x), 1e-12)
+    return (h.max() / h) ** GRADING_EXPONENT
 
 
 def row_coordinates(layout: PlateLayout, xs: NDArray, ny: int) -> NDArray:
