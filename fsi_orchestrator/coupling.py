@@ -223,8 +223,9 @@ class Coupling:
         def probe(t: float) -> NDArray:
             return cap * ramped(t)
 
-        samples = self._follow(probe, times, dt, record_from=times[0] - dt + half)
-        fit = fit_modal_force(samples, self.start_orbit.shape_z, self.start_orbit.added_mass_z)
+        recorded = self._follow(probe, times, dt, record_from=times[0] - dt + half)
+        assert recorded is not None  # a record_from records
+        fit = fit_modal_force(recorded, self.start_orbit.shape_z, self.start_orbit.added_mass_z)
         alignment = self.start_orbit.restart(fit, MIN_SHAPE_ALIGNMENT)
         self.start_fit = dataclasses.replace(
             fit, alignment=alignment, applied=alignment >= MIN_SHAPE_ALIGNMENT
@@ -335,6 +336,7 @@ class Coupling:
                 updated_miss = self.measure.value
             if status.done:
                 break
+            assert self.accelerator is not None  # a second iteration: an iterating scheme
             x = self.accelerator.perform({FIELD: x}, {FIELD: x_tilde})[FIELD]
             solid.restore_checkpoint()
             self.fluid.restore_checkpoint()

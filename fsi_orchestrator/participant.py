@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,7 +35,7 @@ PRESSURE = "pressure"  # (n,) Pa, net follower pressure (+z face minus -z face s
 # before the first window, most recent first (initial data after a fluid-only lead-in)
 PAST_DISPLACEMENT = "past_displacement"
 
-State = Mapping[str, NDArray | float | int]
+State = Mapping[str, NDArray[Any] | float | int]
 
 
 class ParticipantSetupError(RuntimeError):
@@ -70,7 +70,7 @@ class Participant(Protocol):
 
     def interface(self) -> InterfaceMesh: ...
 
-    def read_data(self, data: Mapping[str, NDArray]) -> None:
+    def read_data(self, data: Mapping[str, NDArray[np.float64]]) -> None:
         """Receive the other side's data for the next ``solve`` (e.g. ``{"force": f}``)."""
         ...
 
@@ -78,7 +78,7 @@ class Participant(Protocol):
         """Solve the window [time, time + dt] with the data read; afterwards time += dt."""
         ...
 
-    def write_data(self) -> dict[str, NDArray]:
+    def write_data(self) -> dict[str, NDArray[np.float64]]:
         """The window-end values this participant sends (e.g. displacement, velocity)."""
         ...
 
@@ -90,7 +90,7 @@ class Participant(Protocol):
         """Return to the stored state (time included) so the window can be solved again."""
         ...
 
-    def save_state(self) -> dict[str, NDArray | float | int]:
+    def save_state(self) -> dict[str, NDArray[Any] | float | int]:
         """Everything needed to continue a killed run bit-for-bit (written to checkpoint files)."""
         ...
 

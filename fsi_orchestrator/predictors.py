@@ -184,8 +184,9 @@ class Predictor:
         """x(t - T) + d, d the period-to-period change at the last window (or its linear
         extrapolation from the last two); None until the history reaches back that far."""
         ends = self._times[-2:] if linear else self._times[-1:]
-        back = [self._at(t - self.period) for t in (time, *ends)]
-        if len(ends) < (2 if linear else 1) or any(b is None for b in back):
+        looked_up = [self._at(t - self.period) for t in (time, *ends)]
+        back = [b for b in looked_up if b is not None]
+        if len(ends) < (2 if linear else 1) or len(back) < len(looked_up):
             return None
         recent = self._values[-len(ends) :]
         changes = [{n: v[n] - b[n] for n in v} for v, b in zip(recent, back[1:], strict=True)]

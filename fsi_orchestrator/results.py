@@ -139,8 +139,8 @@ def check_writable(directory: Path, names: tuple[str, ...] = (RESULTS_FILE, CHEC
         where = Path(err.filename) if err.filename else directory
         raise write_failure(where, err, "nothing was run", then="run again") from None
     if shutil.disk_usage(directory).free < MIN_FREE_BYTES:
-        err = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        raise write_failure(directory, err, "nothing was run", then="run again") from None
+        full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        raise write_failure(directory, full, "nothing was run", then="run again") from None
 
 
 # the least free space a run starts with (a results file's first windows, a checkpoint)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The test suite: set up (if needed), ruff (lint, format), then pytest. Extra arguments go to
-# pytest.
+# The test suite: set up (if needed), ruff (lint, format), mypy (types), then pytest. Extra
+# arguments go to pytest.
 # The cluster-sweep test starts a real one-node SLURM (tests/test_sweep_cluster.py): as root,
 # SLURM and munge are installed for it when missing (about 10 s; without them it is skipped).
 set -euo pipefail
@@ -16,4 +16,7 @@ PY_PATHS="fsi_orchestrator solid_adapter fluid_adapter tests benchmarks"
 echo "test: ruff check and ruff format --check on $PY_PATHS" >&2
 .venv/bin/ruff check $PY_PATHS
 .venv/bin/ruff format --check $PY_PATHS
+# types: the three packages, strict on the core (pyproject.toml [tool.mypy])
+echo "test: mypy (pyproject.toml [tool.mypy])" >&2
+.venv/bin/mypy
 exec .venv/bin/python -m pytest "$@"

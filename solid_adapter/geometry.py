@@ -360,12 +360,9 @@ def _beam_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
 def _rectangle_layout(case: Case) -> PlateLayout:
     g, m = case.geometry, case.material
     assert g.length_m and g.width_m and g.thickness_m  # checked by the loader
-    mat = Material.isotropic(
-        "rectangle",
-        m.youngs_modulus_pa,
-        m.poisson_ratio,  # type: ignore[arg-type]
-        m.density_kg_m3,
-    )  # type: ignore[arg-type]
+    E, nu, rho = m.youngs_modulus_pa, m.poisson_ratio, m.density_kg_m3
+    assert E is not None and nu is not None and rho is not None  # ... and these
+    mat = Material.isotropic("rectangle", E, nu, rho)
     t = g.thickness_m
     section = Section.from_layers(stack(mat, t, {}), None)
     W = g.width_m

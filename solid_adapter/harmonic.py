@@ -128,6 +128,7 @@ def periodic_response(
         X = np.zeros(model.ndof, dtype=complex)
         X[free] = y_f
         if correction is not None:
+            assert y_p is not None and y_d is not None  # solved with the correction
             e = correction.shape[free]
             y_g = -(w**2) * y_p + 1j * w * sigma * y_d
             X[free] -= y_g * (e @ y_f) / (1 + e @ y_g)

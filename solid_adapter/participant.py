@@ -207,9 +207,17 @@ class ShellParticipant:
 
     def load_state(self, state: State) -> None:
         past = np.array(state.get("past", np.zeros((0, self.model.ndof))), dtype=float)
+        x, v, a, f_int, f_ext, f_damp = (
+            np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext", "f_damp")
+        )
         self.state = DynamicState(
             float(state["t"]),
-            *(np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext", "f_damp")),
+            x,
+            v,
+            a,
+            f_int,
+            f_ext,
+            f_damp,
             past=tuple(past),
             a_fluid=np.array(state["a_fluid"], dtype=float)
             if int(state.get("has_a_fluid", 0))

@@ -33,8 +33,8 @@ class DriveSignal:
         return cls(
             frequency_hz=a.frequency_hz,
             waveform=a.waveform,
-            left_volts=tuple(a.left_volts),
-            right_volts=tuple(a.right_volts),  # type: ignore[arg-type]
+            left_volts=(a.left_volts[0], a.left_volts[1]),  # two entries (the loader checks)
+            right_volts=(a.right_volts[0], a.right_volts[1]),
             ramp_periods=a.ramp_periods,
             mean_transfer=a.mean_strain_transfer,
         )

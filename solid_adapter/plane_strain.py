@@ -634,8 +634,10 @@ class FlagParticipant:
         return out
 
     def load_state(self, state: State) -> None:
-        arrays = [np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext")]
-        self.state = DynamicState(float(state["t"]), *arrays, np.zeros_like(arrays[0]))
+        x, v, a, f_int, f_ext = (
+            np.array(state[k], dtype=float) for k in ("x", "v", "a", "f_int", "f_ext")
+        )
+        self.state = DynamicState(float(state["t"]), x, v, a, f_int, f_ext, np.zeros_like(x))
         self._force = np.array(state["force"], dtype=float)
         self._traction = np.array(state["traction"], dtype=float)
         self.integrator.newton_iterations = int(state["newton_iterations"])

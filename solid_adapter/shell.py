@@ -27,7 +27,9 @@ spurious bending mechanisms appear.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any, Literal, Protocol, overload
 
 import numpy as np
 import scipy.sparse as sp
@@ -142,7 +144,7 @@ class ShellModel:
         self.inertia = self.mass  # structural mass plus any fluid added mass
         # a fast fluid's damping (force(model, x, v), linear(model, orbit)) beside its added
         # mass: the edge drag of fluid_adapter.drag; None: none
-        self.fluid_damping = None
+        self.fluid_damping: Damping | None = None
         # seed-stress drive (seed Sec. 3.5.2.1): eq. 3-10's stress applied as dead loads, the
         # internal force of the flat plate under each actuator's unit voltage (2, ndof);
         # None: the induced strain (eigenstrain) of the MFC layers
@@ -180,6 +182,20 @@ class ShellModel:
         return director(self.nodal(x)[:, 3:])[0]
 
     # ------------------------------------------------------------------ internal forces
+    @overload
+    def internal(
+        self,
+        x: NDArray,
+        volts: NDArray,
+        tangent: Literal[True] = True,
+        mixed: list[NDArray] | None = None,
+    ) -> tuple[NDArray, sp.csr_matrix, Linearization]: ...
+
+    @overload
+    def internal(
+        self, x: NDArray, volts: NDArray, tangent: bool, mixed: list[NDArray] | None = None
+    ) -> tuple[NDArray, sp.csr_matrix | None, Linearization | None]: ...
+
     def internal(
         self, x: NDArray, volts: NDArray, tangent: bool = True, mixed: list[NDArray] | None = None
     ) -> tuple[NDArray, sp.csr_matrix | None, Linearization | None]:
@@ -217,7 +233,7 @@ class ShellModel:
         d, J, H = director(X[:, 3:])
         ue, de = X[self.enodes, :3], d[self.enodes]
         parts = self._parts(ue, de, volts)
-        fq = sum(p.force() for p in parts).reshape(-1, 9, 6)
+        fq = sum((p.force() for p in parts), start=np.zeros(())).reshape(-1, 9, 6)
         nel = len(self.enodes)
         Je = np.zeros((nel, 9, 6, NDOF))
         Je[:, :, 0, 0] = Je[:, :, 1, 1] = Je[:, :, 2, 2] = 1.0
@@ -237,7 +253,9 @@ class ShellModel:
         fq_geo = (
             fq
             if mixed is None
-            else sum(p.force(s) for p, s in zip(parts, sig, strict=True)).reshape(-1, 9, 6)
+            else sum(
+                (p.force(s) for p, s in zip(parts, sig, strict=True)), start=np.zeros(())
+            ).reshape(-1, 9, 6)
         )
         rq_d = np.zeros((self.n_nodes, 3))
         np.add.at(rq_d, self.enodes.ravel(), fq_geo[:, :, 3:].reshape(-1, 3))
@@ -412,6 +430,22 @@ class _Kinematics:
         return np.einsum("eqai,eqi->eqa", self.a, self.d)
 
 
+class Damping(Protocol):
+    """A damping force on the structure (solvers: Rayleigh, structural; the fast fluid's edge
+    drag, fluid_adapter.drag.EdgeDrag)."""
+
+    @property
+    def amplitude_dependent(self) -> bool: ...
+
+    def force(self, model: ShellModel, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]: ...
+
+    def linear(self, model: ShellModel, orbit: Any = None) -> sp.spmatrix: ...
+
+
+# the stresses C s -> the conjugates of the raw strains (membrane N, bending M, shear Q)
+RawStresses = Callable[[NDArray], tuple[NDArray | None, NDArray, NDArray | None]]
+
+
 class EnergyPart:
     """One quadratic energy 1/2 s^T C s of strain measures s at the points of one rule, with
     ds/dq = B (q: element nodal u and d). ``raw`` maps stresses C s to the conjugates of the raw
@@ -424,7 +458,7 @@ class EnergyPart:
         C: NDArray,
         strain: NDArray,
         B: NDArray | None,
-        raw,
+        raw: RawStresses,
     ) -> None:
         self.q, self.w, self.C, self.strain, self.B, self.raw = q, weights, C, strain, B, raw
         self.sigma = np.einsum("eqij,eqj->eqi", C, strain)
@@ -432,12 +466,18 @@ class EnergyPart:
     def energy(self) -> float:
         return 0.5 * float(np.einsum("eq,eqi,eqi->", self.w, self.sigma, self.strain))
 
+    @property
+    def ds_dq(self) -> NDArray:
+        assert self.B is not None, "a part built for its energy only has no ds/dq"
+        return self.B
+
     def force(self, sigma: NDArray | None = None) -> NDArray:
         s = self.sigma if sigma is None else sigma
-        return np.einsum("eq,eqkm,eqk->em", self.w, self.B, s)
+        return np.einsum("eq,eqkm,eqk->em", self.w, self.ds_dq, s)
 
     def material_tangent(self) -> NDArray:
-        return np.einsum("eq,eqkm,eqkl,eqln->emn", self.w, self.B, self.C, self.B, optimize=True)
+        B = self.ds_dq
+        return np.einsum("eq,eqkm,eqkl,eqln->emn", self.w, B, self.C, B, optimize=True)
 
     def geometric_tangent(self, sigma: NDArray) -> NDArray:
         return _geometric(self.q, *self.raw(sigma), self.w)
@@ -445,7 +485,7 @@ class EnergyPart:
     def predict(self, dq_e: NDArray) -> NDArray:
         """Stresses of the linearized strain s + B dq."""
         return np.einsum(
-            "eqij,eqj->eqi", self.C, self.strain + np.einsum("eqkm,em->eqk", self.B, dq_e)
+            "eqij,eqj->eqi", self.C, self.strain + np.einsum("eqkm,em->eqk", self.ds_dq, dq_e)
         )
 
 
@@ -501,7 +541,7 @@ def _membrane_shear_part(
         Bp = np.concatenate([Bm + sec.G @ Bb, Bs], axis=2)
     G = sec.G
 
-    def raw(sigma):
+    def raw(sigma: NDArray) -> tuple[NDArray | None, NDArray, NDArray | None]:
         N = sigma[..., :3]
         return N, np.einsum("eqji,eqj->eqi", G, N), sigma[..., 3:]
 
@@ -544,7 +584,7 @@ def _b_matrices(q: QuadratureData, kin: _Kinematics) -> tuple[NDArray, NDArray, 
     dN0, dN1 = q.dN[..., 0][..., None], q.dN[..., 1][..., None]  # (nel, nqp, 9, 1)
     a0, a1 = kin.a[..., None, 0, :], kin.a[..., None, 1, :]  # (nel, nqp, 1, 3)
     g0, g1 = kin.gd[..., None, 0, :], kin.gd[..., None, 1, :]
-    Bb = np.zeros((nel, nqp, 3, 9, 6))
+    Bb: NDArray = np.zeros((nel, nqp, 3, 9, 6))
     Bb[..., 0, :, :3] = dN0 * g0
     Bb[..., 0, :, 3:] = dN0 * a0
     Bb[..., 1, :, :3] = dN1 * g1

@@ -638,11 +638,14 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
                 r += (1 - p.alpha_f) * f_d + p.alpha_f * s.f_damp
             if not tangent:
                 return r, None
+            assert K is not None
             T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
-            if coeffs is not None:
-                T = T + ((1 - p.alpha_f) * c0 - c_a) * m.added_mass
-            elif as_force:
-                T = T + (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * m.added_mass
+            if as_force:  # (a stencil's coeffs come only with as_force)
+                assert m.added_mass is not None
+                if coeffs is not None:
+                    T = T + ((1 - p.alpha_f) * c0 - c_a) * m.added_mass
+                else:
+                    T = T + (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * m.added_mass
             if C is not None:
                 T = T + c_v * C
             return r, T
@@ -722,6 +725,7 @@ class EnergyConservingIntegrator(TimeIntegrator):
                 c = (m.strain_energy(x1, V) - pi0 - f_mid @ dx) / denom
                 f_alg = f_mid + c * Mdx
                 if tangent:  # dc/dx1
+                    assert K_mid is not None
                     w = (f1 - f_mid - 0.5 * (K_mid.T @ dx) - 2.0 * c * Mdx) / denom
             f_ext, Kf = loads(t1, x1, tangent)
             r = (2.0 / dt**2) * (Mdx - dt * (m.inertia @ s.v)) + f_alg - 0.5 * (f_ext + s.f_ext)
@@ -731,6 +735,7 @@ class EnergyConservingIntegrator(TimeIntegrator):
                 r += f_d
             if not tangent:
                 return r, None
+            assert K_mid is not None
             T = (2.0 / dt**2 + c) * m.inertia + 0.5 * K_mid
             if Kf is not None:
                 T = T - 0.5 * Kf

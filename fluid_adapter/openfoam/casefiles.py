@@ -283,7 +283,8 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
             [0, 2, -1, 0, 0, 0, 0],
             0.0,
             s,
-            *(2 * [{"type": "nutkWallFunction", "value": 0.0}]),
+            {"type": "nutkWallFunction", "value": 0.0},
+            {"type": "nutkWallFunction", "value": 0.0},
             {"type": "calculated", "value": 0.0},
         ),
         "k": _field(
@@ -291,7 +292,8 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
             [0, 2, -2, 0, 0, 0, 0],
             K0,
             s,
-            *(2 * [{"type": "kqRWallFunction", "value": K0}]),
+            {"type": "kqRWallFunction", "value": K0},
+            {"type": "kqRWallFunction", "value": K0},
             {"type": "inletOutlet", "inletValue": K0, "value": K0},
         ),
         "omega": _field(
@@ -299,7 +301,8 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
             [0, 0, -1, 0, 0, 0, 0],
             OMEGA0,
             s,
-            *(2 * [{"type": "omegaWallFunction", "value": OMEGA0}]),
+            {"type": "omegaWallFunction", "value": OMEGA0},
+            {"type": "omegaWallFunction", "value": OMEGA0},
             {"type": "inletOutlet", "inletValue": OMEGA0, "value": OMEGA0},
         ),
     }
@@ -313,7 +316,8 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
             [0, 2, -1, 0, 0, 0, 0],
             0.0,
             s,
-            *(2 * [{"type": "zeroGradient"}]),
+            {"type": "zeroGradient"},
+            {"type": "zeroGradient"},
             {"type": "calculated", "value": 0.0},
         )
     if s.moving:

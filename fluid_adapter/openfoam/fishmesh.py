@@ -201,7 +201,11 @@ def tank_topology(geo: TankGeometry, res: Resolution) -> BlockTopology:
     vertices = np.array(
         [_vertex(geo, xs[i], j, zs[k]) for k in range(nz) for j in range(ny) for i in range(nx)]
     )
-    blocks, patches = [], {WALLS: ("wall", []), TOP: ("patch", [])}
+    blocks: list[Block] = []
+    patches: dict[str, tuple[str, list[tuple[int, int, int, int]]]] = {
+        WALLS: ("wall", []),
+        TOP: ("patch", []),
+    }
     for k in range(nz - 1):
         for j in range(ny - 1):
             for i in range(nx - 1):
@@ -235,7 +239,8 @@ def _vertex(geo: TankGeometry, x: float, j: int, z: float) -> tuple[float, float
 
 def _add_wall_faces(patches, corners, i, j, k, nx, ny, nz) -> None:
     def face(name: str) -> tuple[int, int, int, int]:
-        return tuple(corners[a] for a in _FACE[name])  # type: ignore[return-value]
+        a, b, c, d = (corners[n] for n in _FACE[name])
+        return (a, b, c, d)
 
     walls, top = patches[WALLS][1], patches[TOP][1]
     if i == 0:

@@ -26,11 +26,12 @@ def write_dict(path: Path, entries: Mapping[str, Any], *, field: bool = False) -
     ``"FoamFile": {"class": ...}`` entry only sets the class, e.g. pointVectorField)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("")
-    entries = dict(entries)
-    header = entries.pop("FoamFile", {})
+    # foamlib keys a headless file's content by None
+    body: dict[str | None, Any] = {key: value for key, value in entries.items()}
+    header = body.pop("FoamFile", {})
     cls = FoamFieldFile if field else FoamFile
     with cls(path) as f:
-        f.update(entries)
+        f.update(body)
         if "class" in header:
             f.class_ = header["class"]
     if field and "Scalar" in str(header.get("class", "")):
@@ -53,8 +54,9 @@ def update_dict(path: Path, entries: Mapping[str, Any]) -> None:
     """Change ``entries`` in place. foamlib (1.7.10) leaves a few blank lines behind the header
     on each update: a coupled run's controlDict grew to 9,000 lines over 4 periods, re-parsed
     by every update and launch; runs of blank lines are collapsed here."""
+    body: dict[str | None, Any] = {key: value for key, value in entries.items()}
     with FoamFile(path) as f:
-        f.update(entries)
+        f.update(body)
     text = path.read_text()
     compact = _BLANK_RUNS.sub("\n\n", text)
     if compact != text:
@@ -71,7 +73,7 @@ def read_points(path: Path) -> NDArray[np.float64]:
 def read_faces(path: Path) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """``polyMesh/faces`` as (offsets, labels): face i is labels[offsets[i]:offsets[i + 1]]
     (the layout of a binary faceCompactList; an ASCII faceList is converted to it)."""
-    data = FoamFile(path)[None]
+    data: Any = FoamFile(path)[None]  # a faceCompactList (offsets, labels) or a faceList
     if isinstance(data, tuple) and len(data) == 2:
         return np.asarray(data[0], dtype=np.int64), np.asarray(data[1], dtype=np.int64)
     sizes = np.array([len(f) for f in data], dtype=np.int64)
@@ -81,5 +83,5 @@ def read_faces(path: Path) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
 
 def read_boundary(path: Path) -> dict[str, dict]:
     """``constant/polyMesh/boundary`` as {patch: {type, nFaces, startFace, ...}}."""
-    entries = FoamFile(path)[None]
+    entries: Any = FoamFile(path)[None]  # [(name, {type, nFaces, ...}), ...]
     return {name: dict(d) for name, d in entries}

@@ -24,6 +24,7 @@ import os
 import shutil
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from foamlib import FoamFieldFile, FoamFile
@@ -166,7 +167,8 @@ class FoamRun:
             with FoamFieldFile(root / time_name / FIELD) as f:
                 for patch in self.interface.patches:
                     if patch.name in f.boundary_field:
-                        f.boundary_field[patch.name]["value"] = [0.0, 0.0, 0.0]
+                        entry: Any = f.boundary_field[patch.name]  # the patch's sub-dictionary
+                        entry["value"] = [0.0, 0.0, 0.0]
 
     def set_window(
         self, start: str, end: float, dt: float, write_every: int = 1, handshake: str | None = None

@@ -154,7 +154,7 @@ class OpenFoamParticipant:
         return state
 
     def load_state(self, state: State) -> None:
-        t = float(state["t"])  # type: ignore[arg-type]
+        t = float(state["t"])
         u = np.array(state["displacement"], dtype=float)
         self.driver = self._driver_at(t, u)
         self._displacement = np.array(state["input_displacement"], dtype=float)

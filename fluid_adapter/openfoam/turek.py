@@ -15,6 +15,7 @@ from __future__ import annotations
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from foamlib import FoamFile
@@ -159,7 +160,8 @@ def _fix_patch_types(case: Path, bodies: tuple[str, ...] = (BODY,)) -> None:
     path = case / "constant" / "polyMesh" / "boundary"
     types = {SIDES: "empty", WALLS: "wall"} | dict.fromkeys(bodies, "wall")
     file = FoamFile(path)
-    entries = [(name, dict(entry)) for name, entry in file[None]]
+    listed: Any = file[None]  # [(name, {type, nFaces, ...}), ...]
+    entries = [(name, dict(entry)) for name, entry in listed]
     missing = set(types) - {name for name, _ in entries}
     if missing:
         raise OpenFoamRunError(f"{path}: gmshToFoam made no patch {sorted(missing)}")

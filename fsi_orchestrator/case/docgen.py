@@ -10,8 +10,9 @@ import types
 import typing
 from enum import Enum
 from pathlib import Path
+from typing import Any
 
-from .params import choices, spec_of
+from .params import ParamSpec, choices, spec_of
 from .schema import SECTIONS
 
 HEADER = """# Case file reference (`case.toml`)
@@ -28,7 +29,7 @@ keys, or off).
 """
 
 
-def _type_name(tp) -> str:
+def _type_name(tp: Any) -> str:
     origin = typing.get_origin(tp)
     if origin in (typing.Union, types.UnionType):
         args = [a for a in typing.get_args(tp) if a is not type(None)]
@@ -40,7 +41,7 @@ def _type_name(tp) -> str:
     return {float: "number", int: "integer", str: "string", bool: "boolean"}.get(tp, str(tp))
 
 
-def _default(f: dataclasses.Field) -> str:
+def _default(f: dataclasses.Field[Any]) -> str:
     value = f.default
     if value is None:  # what unset means: the description says (a preset's, derived, off)
         return "unset"
@@ -55,7 +56,7 @@ def _default(f: dataclasses.Field) -> str:
     return f"`{value:g}`" if isinstance(value, float) else f"`{value}`"
 
 
-def _bounds(spec) -> str:
+def _bounds(spec: ParamSpec) -> str:
     parts = []
     for name, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         v = getattr(spec, name)
@@ -91,7 +92,7 @@ def main() -> int:
     """``python -m fsi_orchestrator.case.docgen [FILE]``: (re)write the case format reference
     (default: the repository's docs/case_format.md)."""
     if len(sys.argv) > 1 and sys.argv[1].startswith("-"):
-        print(main.__doc__.split(":", 1)[0].strip("`"), file=sys.stderr)
+        print((main.__doc__ or "").split(":", 1)[0].strip("`"), file=sys.stderr)
         return 0 if sys.argv[1] in ("-h", "--help") else 2
     default = Path(__file__).resolve().parents[2] / "docs" / "case_format.md"
     target = Path(sys.argv[1]) if len(sys.argv) > 1 else default

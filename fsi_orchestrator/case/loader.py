@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 import tomllib
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
@@ -136,7 +136,7 @@ _TABLE = re.compile(r"^\s*\[+\s*([A-Za-z0-9_.\- ]+?)\s*\]")
 _KEY = re.compile(r"^\s*([A-Za-z0-9_.\-]+)\s*=")
 
 
-def _key_on_line(text: str, predicate) -> str | None:
+def _key_on_line(text: str, predicate: Callable[[str], bool]) -> str | None:
     """``section.key`` whose value is on (or runs into) the first line matching ``predicate``."""
     table, key = "", None
     for line in text.splitlines():

@@ -38,18 +38,19 @@ def param(
     doc: str = "",
     *,
     unit: str = "",
-    gt=None,
-    ge=None,
-    lt=None,
-    le=None,
-    length=None,
+    gt: float | None = None,
+    ge: float | None = None,
+    lt: float | None = None,
+    le: float | None = None,
+    length: int | None = None,
 ) -> Any:
     spec = ParamSpec(doc=doc, unit=unit, gt=gt, ge=ge, lt=lt, le=le, length=length)
     return dataclasses.field(default=default, metadata={"spec": spec})
 
 
-def spec_of(f: dataclasses.Field) -> ParamSpec:
-    return f.metadata.get("spec", ParamSpec(doc=""))
+def spec_of(f: dataclasses.Field[Any]) -> ParamSpec:
+    spec = f.metadata.get("spec")
+    return spec if isinstance(spec, ParamSpec) else ParamSpec(doc="")
 
 
 # --------------------------------------------------------------------------- type coercion

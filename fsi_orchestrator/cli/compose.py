@@ -6,11 +6,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
+from ..participant import Participant
+
+if TYPE_CHECKING:
+    from ..coupling import Coupling
 
 
 def without_cfd(case: Case) -> Case:
@@ -122,8 +127,8 @@ class CoupledRun:
     (choose_start) changes its ramp and its number of periods; ``start_note`` says why."""
 
     case: Case
-    solid: object
-    coupling: object
+    solid: Participant
+    coupling: Coupling
     start_note: str | None = None
 
 
@@ -178,6 +183,7 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     from fluid_adapter.potential.participant import PotentialParticipant
     from solid_adapter.build import CorrectableStart, build_shell_model, build_shell_participant
 
+    from ..acceleration import IQNIMVJAcceleration
     from ..coupling import Coupling
 
     model = build_shell_model(case)
@@ -200,6 +206,7 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
         fluid = fluid_factory(case, solid)
     else:
         true_added_mass = fast_added_mass(case, build_shell_model(case))
+        assert true_added_mass is not None  # no fluid factory: the fast fluid, coupled
         fluid = PotentialParticipant(true_added_mass, solid.interface())
     if settings.uses_added_mass:  # M~ weighted with the fluid's own discrete acceleration
         model.added_mass_stencil = getattr(fluid, "acceleration_stencil", None)
@@ -213,7 +220,8 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
         estimate.matrix if settings.uses_added_mass else None,
         start_orbit=start,
     )
-    if learned is not None:
+    if learned is not None:  # coupling.jacobian_from: iqn-ils-am only (the loader checks)
+        assert isinstance(coupling.accelerator, IQNIMVJAcceleration)
         coupling.accelerator.warm_start(learned)
     return CoupledRun(case, solid, coupling, start_note)
 

@@ -81,8 +81,8 @@ def plot_sweep(csv_path: Path, output: Path) -> Path:
     """Amplitude and thrust against frequency, one curve per waveform, with the periodic
     estimate's uncertainty as error bars where the rows carry it; the original fish's sweep
     also shows the seed's figures."""
-    with open(csv_path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    with open(csv_path, newline="") as table:
+        rows = list(csv.DictReader(table))
     identity = None
     if (csv_path.parent / "sweep_case.json").is_file():
         try:

@@ -621,6 +621,7 @@ def _sweep(args: argparse.Namespace) -> int:
     done = table.prepare(points, args.resume) if rank == 0 else None
     if comm is not None:  # every rank deals the same points
         done = comm.bcast(done, root=0)
+    assert done is not None  # rank 0's (without MPI the only rank)
 
     def say(line: str, always: bool = False) -> None:
         if always or not args.quiet:

@@ -12,12 +12,16 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..case import Case
 from .compose import without_cfd
+
+if TYPE_CHECKING:
+    from fluid_adapter.swimming import BodyDrag, Turning
 
 # the contract of fsi-run --json for a swimming case, and fsi-sweep's extra columns
 SWIMMING_KEYS = (
@@ -37,7 +41,7 @@ class SwimmingModel:
     half_height_m: NDArray
     x_ref_m: float  # centre of mass: the turning axis
     body_length_m: float
-    drag: object  # fluid_adapter.swimming.BodyDrag
+    drag: BodyDrag
     density_kg_m3: float
     added_mass_coefficient: float
     crossflow_drag_coefficient: float
@@ -64,7 +68,8 @@ class SwimmingModel:
                 speed = self_propelled_speed(thrust, self.drag.total)
             return speed, thrust(speed)
 
-        slip, speed, thrust, turn = 0.0, 0.0, 0.0, None
+        slip, speed, thrust = 0.0, 0.0, 0.0
+        turn: Turning | None = None
         for _ in range(SLIP_ITERATIONS):
             speed, thrust = speed_with(slip)
             turn = turning_rate(
@@ -78,6 +83,7 @@ class SwimmingModel:
                 **fluid,
             )
             slip = turn.slip_rad
+        assert turn is not None  # SLIP_ITERATIONS >= 1
         drag = self.drag.parts(speed)
         length = self.body_length_m
         return {
@@ -209,8 +215,8 @@ def plot_swimming_sweep(csv_path: Path, output: Path) -> Path | None:
 
     import matplotlib.pyplot as plt
 
-    with open(csv_path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    with open(csv_path, newline="") as table:
+        rows = list(csv.DictReader(table))
     if not rows or SWIMMING_KEYS[0] not in rows[0]:
         return None
     keys = ("swimming_speed_m_s", "swimming_number", "turning_rate_deg_s")

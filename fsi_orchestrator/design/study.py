@@ -433,7 +433,7 @@ def load_study(directory: str | Path) -> Study:
     if ("objective" in raw) == ("objectives" in raw):
         _fail("[objective]", "is required (or a list [[objectives]] with weights), not both")
     if "objective" in raw:
-        objectives = (_objective(raw["objective"], "objective"),)
+        objectives: tuple[Objective, ...] = (_objective(raw["objective"], "objective"),)
     else:
         listed = raw["objectives"]
         if not isinstance(listed, list) or not listed:
