@@ -43,9 +43,9 @@ class Results:
 
     summary: dict[str, Any]
     path: Path | None = None
-    _cache: dict[str, NDArray] = field(default_factory=dict, repr=False, compare=False)
+    _cache: dict[str, NDArray[np.float64]] = field(default_factory=dict, repr=False, compare=False)
 
-    def series(self, name: str) -> NDArray:
+    def series(self, name: str) -> NDArray[np.float64]:
         """A dataset of results.h5 by name, e.g. ``shell/tip_displacement_m`` (windows x 3)."""
         if self.path is None:
             raise KeyError(
@@ -76,17 +76,17 @@ class Results:
             return dict(h5.attrs)
 
     @property
-    def time_s(self) -> NDArray:
+    def time_s(self) -> NDArray[np.float64]:
         """End time of each window (s)."""
         return self.series("time_s")[:, 0]
 
     @property
-    def tip_displacement_m(self) -> NDArray:
+    def tip_displacement_m(self) -> NDArray[np.float64]:
         """Tail-tip displacement (x, y, z) at the end of each window (m); z is the swing."""
         return self.series("shell/tip_displacement_m")
 
     @property
-    def thrust_n(self) -> NDArray | None:
+    def thrust_n(self) -> NDArray[np.float64] | None:
         """The fluid's thrust per window (N, OpenFOAM), or None where the fluid reports none."""
         try:
             return self.series("fluid/thrust_n")[:, 0]

@@ -68,7 +68,7 @@ class ConvergenceMeasure(ABC):
         self.reference = math.nan
         self.converged = False
 
-    def measure(self, old: NDArray, new: NDArray) -> bool:
+    def measure(self, old: NDArray[np.float64], new: NDArray[np.float64]) -> bool:
         diff = np.asarray(new, dtype=float) - np.asarray(old, dtype=float)
         self.norm_diff = float(np.linalg.norm(diff))
         self.reference = self._reference(np.asarray(new, dtype=float))
@@ -76,7 +76,7 @@ class ConvergenceMeasure(ABC):
         return self.converged
 
     @abstractmethod
-    def _reference(self, new: NDArray) -> float:
+    def _reference(self, new: NDArray[np.float64]) -> float:
         """The norm the difference is compared against (times the tolerance)."""
 
     @property
@@ -100,7 +100,7 @@ class AbsoluteMeasure(ConvergenceMeasure):
         _check_tolerance("absolute", tolerance, at_most_one=False)
         super().__init__(tolerance=tolerance, suffices=suffices)
 
-    def _reference(self, new: NDArray) -> float:
+    def _reference(self, new: NDArray[np.float64]) -> float:
         return 1.0
 
 
@@ -113,7 +113,7 @@ class RelativeMeasure(ConvergenceMeasure):
         _check_tolerance("relative", tolerance, at_most_one=True)
         super().__init__(tolerance=tolerance, suffices=suffices)
 
-    def _reference(self, new: NDArray) -> float:
+    def _reference(self, new: NDArray[np.float64]) -> float:
         return float(np.linalg.norm(new))
 
 
@@ -129,7 +129,7 @@ class ScaledRelativeMeasure(RelativeMeasure):
         super().__init__(tolerance=tolerance, suffices=suffices)
         self.scale = 0.0
 
-    def _reference(self, new: NDArray) -> float:
+    def _reference(self, new: NDArray[np.float64]) -> float:
         return max(float(np.linalg.norm(new)), self.scale)
 
 
@@ -146,7 +146,7 @@ class ResidualRelativeMeasure(ConvergenceMeasure):
         super().reset_window()
         self._first: float | None = None
 
-    def _reference(self, new: NDArray) -> float:
+    def _reference(self, new: NDArray[np.float64]) -> float:
         if self._first is None:
             self._first = self.norm_diff
         return self._first
@@ -200,7 +200,9 @@ class ConvergenceCriteria:
             for m in ms:
                 m.reset_window()
 
-    def check(self, old: Mapping[str, NDArray], new: Mapping[str, NDArray]) -> WindowStatus:
+    def check(
+        self, old: Mapping[str, NDArray[np.float64]], new: Mapping[str, NDArray[np.float64]]
+    ) -> WindowStatus:
         """Measure the iteration ``old = x^k -> new = x~^k``; raise if it diverged."""
         self.iteration += 1
         for field in self.measures:
@@ -220,7 +222,9 @@ class ConvergenceCriteria:
             return WindowStatus.MAX_ITERATIONS
         return WindowStatus.ITERATE
 
-    def _check_divergence(self, field: str, old: NDArray, new: NDArray) -> None:
+    def _check_divergence(
+        self, field: str, old: NDArray[np.float64], new: NDArray[np.float64]
+    ) -> None:
         for label, values in (("output x~", new), ("input x", old)):
             if not np.all(np.isfinite(values)):
                 raise self._diverged(f"non-finite values (nan/inf) in {label}", field)

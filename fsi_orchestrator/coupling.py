@@ -29,8 +29,10 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from itertools import pairwise
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,6 +65,8 @@ from .start_orbit import (
 )
 
 FIELD = "force"
+T = TypeVar("T")
+Motion = Callable[[float], NDArray[np.float64]]  # t -> the interface nodes' displacements
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
 SCALE_MEMORY = 20  # windows over which the fluid force's size is remembered
 PAST_WINDOWS = 4  # lead-in displacements handed on (a BDF2-of-BDF2 stencil needs 3)
@@ -128,9 +132,9 @@ class Coupling:
     def __init__(
         self,
         fluid: Participant,
-        solid_points: NDArray,
+        solid_points: NDArray[np.float64],
         settings: CouplingSettings,
-        added_mass_z: NDArray | None = None,
+        added_mass_z: NDArray[np.float64] | None = None,
         start_orbit: StartOrbit | None = None,
     ) -> None:
         self.fluid, self.settings = fluid, settings
@@ -165,7 +169,7 @@ class Coupling:
         self.lead_in_wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
         self.resumed_from_scheme: CouplingScheme | None = None  # a resumed run's former scheme
 
-    def _in_fluid(self, call, *args):
+    def _in_fluid(self, call: Callable[..., T], *args: Any) -> T:
         """``call(*args)``, its wall time counted as the fluid's (results.h5
         coupling/fluid_wall_s: the rest of a window is the coupling's and the structure's)."""
         start = time.perf_counter()
@@ -201,7 +205,7 @@ class Coupling:
         times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
         half = n * dt / 2
 
-        def ramped(t: float) -> NDArray:
+        def ramped(t: float) -> NDArray[np.float64]:
             return _smoothstep((t - times[0] + dt) / half) * old(t)
 
         if self.start_orbit is None:
@@ -220,7 +224,7 @@ class Coupling:
             LEAD_IN_MAX_SPEED_M_S / speed if speed > 0 else 1.0,
         )
 
-        def probe(t: float) -> NDArray:
+        def probe(t: float) -> NDArray[np.float64]:
             return cap * ramped(t)
 
         recorded = self._follow(probe, times, dt, record_from=times[0] - dt + half)
@@ -232,7 +236,7 @@ class Coupling:
         )
         new = _periodic_motion(solid, omega)
 
-        def blended(t: float) -> NDArray:
+        def blended(t: float) -> NDArray[np.float64]:
             r = _smoothstep((t - times[0] + dt) / (n * dt))
             return (1 - r) * cap * old(t) + r * new(t)
 
@@ -240,7 +244,7 @@ class Coupling:
         self._initialize_data(solid, blended, dt)
         return 2
 
-    def _initialize_data(self, solid: Participant, motion, dt: float) -> None:
+    def _initialize_data(self, solid: Participant, motion: Motion, dt: float) -> None:
         """The lead-in's last fluid solve ends at t = 0 with the structure's motion there: its
         force is the exchanged variable at t = 0 (preCICE's initial data). The structure takes
         it as its load at t = 0, which window 0's generalized-alpha balance weights with
@@ -278,7 +282,7 @@ class Coupling:
         self.predictor.restart(solid.time, {FIELD: x})
 
     def _follow(
-        self, motion, times: list[float], dt: float, record_from: float | None = None
+        self, motion: Motion, times: list[float], dt: float, record_from: float | None = None
     ) -> LeadInSamples | None:
         """The fluid alone through a prescribed interface motion u(t) (solid nodes), window by
         window, or all at once by a fluid that can (optional ``follow(displacements, dt)``:
@@ -299,7 +303,7 @@ class Coupling:
         t, u, v, a, f = (np.array(c) for c in zip(*rows, strict=True))
         return LeadInSamples(t, u, v, a, f)
 
-    def _prescribed_window(self, motion, t: float, dt: float) -> NDArray:
+    def _prescribed_window(self, motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
         """One fluid window ending at t on the motion (velocity and acceleration: central
         differences of u); the fluid's nodal force."""
         self.fluid.read_data(
@@ -358,8 +362,13 @@ class Coupling:
         }
 
     def _guarded_iteration(
-        self, solid: Participant, x: NDArray, x_good: NDArray | None, dt: float, window: int
-    ) -> tuple[NDArray, NDArray]:
+        self,
+        solid: Participant,
+        x: NDArray[np.float64],
+        x_good: NDArray[np.float64] | None,
+        dt: float,
+        window: int,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """One Gauss-Seidel pass, returning (the iterate used, x~). A quasi-Newton step can
         overshoot so far that a solver fails on it (a CFD step at Courant 8): the iterate is then
         pulled halfway back toward the last accepted one, up to MAX_RETRIES times, from the
@@ -405,12 +414,14 @@ class Coupling:
             else 'the plate: use "iqn-ils-am" or "explicit-am", or a smaller coupling.relaxation.'
         )
 
-    def _first_iterate(self, t_end: float) -> NDArray:
+    def _first_iterate(self, t_end: float) -> NDArray[np.float64]:
         if not self.predictor.has_history:
             return np.zeros((self.n_solid, 3))
         return self.predictor.predict(t_end)[FIELD]
 
-    def _gauss_seidel(self, solid: Participant, x: NDArray, dt: float) -> NDArray:
+    def _gauss_seidel(
+        self, solid: Participant, x: NDArray[np.float64], dt: float
+    ) -> NDArray[np.float64]:
         solid.read_data({FORCE: x})
         solid.solve(dt)
         motion = solid.write_data()
@@ -424,7 +435,7 @@ class Coupling:
         return force
 
     # ------------------------------------------------------------------ restart
-    def save_state(self) -> dict:
+    def save_state(self) -> dict[str, Any]:
         return {
             "scheme": np.bytes_(str(self.settings.scheme)),
             "force_scales": np.array(self.force_scales),
@@ -436,7 +447,7 @@ class Coupling:
             "fluid": self.fluid.save_state(),
         }
 
-    def load_state(self, state, solid: Participant) -> None:
+    def load_state(self, state: Mapping[str, Any], solid: Participant) -> None:
         """Continue from :meth:`save_state` (``solid`` already restored). A run saved with
         another coupling.scheme goes on with this one: its accelerator starts afresh, and
         between a plain and an *-am scheme (f against g = f + M~ a exchanged) the predictor and
@@ -458,7 +469,7 @@ class Coupling:
             self._start_from_fluid_force(solid)  # the history holds the other variable
 
 
-def peak_speed(motion, times: list[float]) -> float:
+def peak_speed(motion: Motion, times: list[float]) -> float:
     """The largest speed of any interface node along u(t) between consecutive sample times."""
     path = [motion(t) for t in times]
     return max(
@@ -473,24 +484,31 @@ def _smoothstep(s: float) -> float:
     return s * s * s * (10 - 15 * s + 6 * s * s)
 
 
-def _periodic_motion(solid: Participant, omega: float):
+def _periodic_motion(solid: Participant, omega: float) -> Motion:
     """u(t): the interface motion on the periodic orbit the structure starts on now, with all
     its harmonics (``orbit_motion``, optional in the protocol); else the harmonic
     u0 cos wt + v0/w sin wt through its state at t = 0."""
-    orbit_motion = getattr(solid, "orbit_motion", None)
+    orbit_motion: Callable[[], Motion | None] | None = getattr(solid, "orbit_motion", None)
     on_orbit = orbit_motion() if orbit_motion is not None else None
     if on_orbit is not None:
         return on_orbit
     state = solid.write_data()
     u0, v0 = state[DISPLACEMENT], state[VELOCITY]
-    return lambda t: u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t)
+
+    def harmonic(t: float) -> NDArray[np.float64]:
+        u: NDArray[np.float64] = u0 * np.cos(omega * t) + v0 / omega * np.sin(omega * t)
+        return u
+
+    return harmonic
 
 
-def _velocity(motion, t: float, dt: float) -> NDArray:
+def _velocity(motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
     h = 1e-4 * dt
-    return (motion(t + h) - motion(t - h)) / (2 * h)
+    rate: NDArray[np.float64] = (motion(t + h) - motion(t - h)) / (2 * h)
+    return rate
 
 
-def _acceleration(motion, t: float, dt: float) -> NDArray:
+def _acceleration(motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
     h = 1e-4 * dt
-    return (motion(t + h) - 2 * motion(t) + motion(t - h)) / h**2
+    rate: NDArray[np.float64] = (motion(t + h) - 2 * motion(t) + motion(t - h)) / h**2
+    return rate

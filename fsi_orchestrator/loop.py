@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -51,13 +52,13 @@ class OutputSettings:
     checkpoint_every: int = 10
     # windows between a fluid's flow fields (participants with ``flow_fields()``); 0: none
     flow_every: int = 0
-    attributes: dict = field(default_factory=dict)
+    attributes: dict[str, Any] = field(default_factory=dict)
     # the case's identity (provenance.case_identity): a checkpoint of another case is refused
     case_identity: str | None = None
 
 
 # (windows done, windows in all, the window's results row)
-ProgressFn = Callable[[int, int, dict], None]
+ProgressFn = Callable[[int, int, dict[str, Any]], None]
 # may end a run before its last window: (the results so far) -> why, or None to go on
 StopRule = Callable[[ResultsFile], str | None]
 
@@ -207,7 +208,7 @@ class WindowLoop:
 
     # ----------------------------------------------------------------- checkpoints
     def _checkpoint(self, path: Path) -> None:
-        loop_state: dict = {"window": self.window, "dt_s": self.schedule.dt}
+        loop_state: dict[str, Any] = {"window": self.window, "dt_s": self.schedule.dt}
         if self.coupling is not None:
             loop_state["coupling"] = self.coupling.save_state()
         identity = self.output.case_identity

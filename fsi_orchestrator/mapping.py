@@ -71,7 +71,7 @@ class MappingError(ValueError):
     """The point clouds cannot be mapped (bad shapes, duplicate nodes, uncovered points)."""
 
 
-def wendland_c2(r: NDArray) -> NDArray:
+def wendland_c2(r: NDArray[np.float64]) -> NDArray[np.float64]:
     """Wendland C2 function (1 - r)^4 (4 r + 1) of the scaled distance r, zero for r >= 1."""
     s = np.clip(1.0 - r, 0.0, None)
     return s**4 * (4.0 * r + 1.0)
@@ -128,24 +128,27 @@ class InterfaceMapping:
 
     @property
     def n_source(self) -> int:
-        return self.matrix.shape[1]
+        return int(self.matrix.shape[1])
 
     @property
     def n_target(self) -> int:
-        return self.matrix.shape[0]
+        return int(self.matrix.shape[0])
 
-    def consistent(self, values: ArrayLike) -> NDArray:
+    def consistent(self, values: ArrayLike) -> NDArray[np.float64]:
         """Values at the target points from values at the source nodes, (n_s[, k]) -> (n_t[, k])
         (displacement, velocity: constant and linear fields are exact)."""
-        return self._by_column @ _as_data("values", values, self.n_source)
+        mapped: NDArray[np.float64] = self._by_column @ _as_data("values", values, self.n_source)
+        return mapped
 
-    def conservative(self, forces_at_target: ArrayLike) -> NDArray:
+    def conservative(self, forces_at_target: ArrayLike) -> NDArray[np.float64]:
         """Nodal forces on the source nodes from point forces at the targets, H^T F,
         (n_t[, k]) -> (n_s[, k]): total force and in-plane-arm moment are preserved."""
-        return self.matrix.T @ _as_data("forces_at_target", forces_at_target, self.n_target)
+        data = _as_data("forces_at_target", forces_at_target, self.n_target)
+        mapped: NDArray[np.float64] = self.matrix.T @ data
+        return mapped
 
 
-def _as_points(name: str, points: ArrayLike) -> NDArray:
+def _as_points(name: str, points: ArrayLike) -> NDArray[np.float64]:
     pts = np.array(points, dtype=float)  # a copy: the caller's array is never touched
     if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) == 0:
         raise MappingError(
@@ -157,14 +160,14 @@ def _as_points(name: str, points: ArrayLike) -> NDArray:
     return pts
 
 
-def _as_data(name: str, values: ArrayLike, n: int) -> NDArray:
+def _as_data(name: str, values: ArrayLike, n: int) -> NDArray[np.float64]:
     data = np.asarray(values, dtype=float)
     if data.ndim not in (1, 2) or data.shape[0] != n:
         raise MappingError(f"`{name}` must have shape ({n},) or ({n}, k), got {data.shape}")
     return data
 
 
-def _check_distinct(tree: cKDTree, src: NDArray) -> None:
+def _check_distinct(tree: cKDTree, src: NDArray[np.float64]) -> None:
     if len(src) < 3:
         raise MappingError(f"`source_xy` needs at least 3 points, got {len(src)}")
     d, _ = tree.query(src, 2)
@@ -178,8 +181,8 @@ def _check_distinct(tree: cKDTree, src: NDArray) -> None:
 
 
 def _initial_radii(
-    tree: cKDTree, src: NDArray, support_radius: float | None, neighbors: int
-) -> NDArray:
+    tree: cKDTree, src: NDArray[np.float64], support_radius: float | None, neighbors: int
+) -> NDArray[np.float64]:
     if support_radius is not None:
         if not support_radius > 0:
             raise MappingError(f"`support_radius` must be > 0 m, got {support_radius}")
@@ -187,10 +190,11 @@ def _initial_radii(
     if not 3 <= neighbors < len(src):
         raise MappingError(f"`neighbors` must be in [3, {len(src) - 1}], got {neighbors}")
     d, _ = tree.query(src, neighbors + 1)
-    return d[:, -1] * (1.0 + 1e-9)
+    radii: NDArray[np.float64] = d[:, -1] * (1.0 + 1e-9)
+    return radii
 
 
-def _degenerate(points: NDArray) -> bool:
+def _degenerate(points: NDArray[np.float64]) -> bool:
     """Too few or nearly collinear points: the linear polynomial is not determined."""
     if len(points) < 3:
         return True
@@ -198,7 +202,9 @@ def _degenerate(points: NDArray) -> bool:
     return bool(lam[0] <= _MIN_ASPECT * lam[1])
 
 
-def _grow_degenerate(tree: cKDTree, src: NDArray, radii: NDArray) -> tuple[NDArray, list]:
+def _grow_degenerate(
+    tree: cKDTree, src: NDArray[np.float64], radii: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], list[list[int]]]:
     radii = radii.copy()
     for _ in range(_MAX_GROWTHS):
         members = tree.query_ball_point(src, radii)
@@ -213,8 +219,13 @@ def _grow_degenerate(tree: cKDTree, src: NDArray, radii: NDArray) -> tuple[NDArr
 
 
 def _patch_weights(
-    src: NDArray, tgt: NDArray, center: int, radius: float, members: NDArray, targets: NDArray
-) -> tuple[NDArray, NDArray]:
+    src: NDArray[np.float64],
+    tgt: NDArray[np.float64],
+    center: int,
+    radius: float,
+    members: NDArray[np.intp],
+    targets: NDArray[np.intp],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Blending weight times local cardinal weights, (n_targets, n_members), and the blending
     weights alone. Coordinates are shifted to the centre and scaled by the radius."""
     xm = (src[members] - src[center]) / radius
@@ -231,14 +242,18 @@ def _patch_weights(
 
 
 def _assemble(
-    src: NDArray, tgt: NDArray, radii: NDArray, members: list, covers: list
+    src: NDArray[np.float64],
+    tgt: NDArray[np.float64],
+    radii: NDArray[np.float64],
+    members: list[list[int]],
+    covers: list[list[int]],
 ) -> sparse.csr_array:
     rows, cols, vals = [], [], []
     blend_sum = np.zeros(len(tgt))
-    for i, (m, t) in enumerate(zip(members, covers, strict=True)):
-        if not t:
+    for i, (member_list, cover_list) in enumerate(zip(members, covers, strict=True)):
+        if not cover_list:
             continue
-        m, t = np.asarray(m), np.asarray(t)
+        m, t = np.asarray(member_list), np.asarray(cover_list)
         w, blend = _patch_weights(src, tgt, i, radii[i], m, t)
         blend_sum[t] += blend
         rows.append(np.repeat(t, len(m)))
@@ -253,7 +268,7 @@ def _assemble(
     return matrix
 
 
-def _check_covered(tgt: NDArray, blend_sum: NDArray) -> None:
+def _check_covered(tgt: NDArray[np.float64], blend_sum: NDArray[np.float64]) -> None:
     uncovered = np.flatnonzero(blend_sum <= 0.0)
     if len(uncovered):
         raise MappingError(

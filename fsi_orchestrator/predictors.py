@@ -121,7 +121,7 @@ class Predictor:
             return next(r for r, k in _RULE_ORDER.items() if k == self._fallback)
         return self.rules[int(np.argmin(self.rule_errors))]
 
-    def record(self, time: float, values: Mapping[str, NDArray]) -> None:
+    def record(self, time: float, values: Mapping[str, NDArray[np.float64]]) -> None:
         """Store the converged values at the end ``time`` of a window (copies)."""
         if self._times and not time > self._times[-1]:
             raise ValueError(f"window end times must increase: got {time} after {self._times[-1]}")
@@ -139,7 +139,7 @@ class Predictor:
             keep = max(keep, sum(t >= self._times[-1] - span for t in self._times))
         self._times, self._values = self._times[-keep:], self._values[-keep:]
 
-    def restart(self, time: float, values: Mapping[str, NDArray]) -> None:
+    def restart(self, time: float, values: Mapping[str, NDArray[np.float64]]) -> None:
         """Forget the history (it holds another variable) and start from ``values``."""
         self._times, self._values = [], []
         self.all_rule_errors = np.full(len(ALL_RULES), np.inf)
@@ -197,8 +197,8 @@ class Predictor:
         }
 
     # ------------------------------------------------------------------ restart
-    def save_state(self) -> dict[str, NDArray]:
-        state: dict[str, NDArray] = {
+    def save_state(self) -> dict[str, NDArray[np.float64]]:
+        state: dict[str, NDArray[np.float64]] = {
             "predictor_times": np.array(self._times),
             "predictor_all_rule_errors": self.all_rule_errors.copy(),
         }
@@ -206,7 +206,7 @@ class Predictor:
             state.update({f"predictor_{j}_{n}": v.copy() for n, v in values.items()})
         return state
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         self._times = [float(t) for t in np.asarray(state["predictor_times"]).ravel()]
         if "predictor_all_rule_errors" in state:
             self.all_rule_errors = np.array(state["predictor_all_rule_errors"], dtype=float)

@@ -63,7 +63,7 @@ def _plain(value: Any) -> Any:
 
 def case_dict(case: Case) -> dict[str, Any]:
     """Every section of the resolved case, defaults included (None: unset)."""
-    raw = _plain(dataclasses.asdict(case))
+    raw: dict[str, Any] = _plain(dataclasses.asdict(case))
     raw.pop("directory", None)
     return raw
 

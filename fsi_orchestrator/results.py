@@ -16,8 +16,9 @@ import re
 import shutil
 import sys
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
+from types import TracebackType
 from typing import Any
 
 import h5py
@@ -72,12 +73,14 @@ def h5_write_error(err: Exception) -> OSError | None:
 
 # After a failed write, every h5py object freed reports the write again (a traceback and
 # "Exception ignored in ... __dealloc__", dozens of lines): those are dropped, others go on.
-def _drop_h5py_dealloc_errors(unraisable) -> None:
+def _drop_h5py_dealloc_errors(unraisable: sys.UnraisableHookArgs) -> None:
     if "h5py" not in repr(unraisable.object) and "h5py" not in repr(unraisable.err_msg):
         _ORIGINAL_HOOKS[0](unraisable)
 
 
-def _drop_h5py_dealloc_tracebacks(kind, value, tb) -> None:
+def _drop_h5py_dealloc_tracebacks(
+    kind: type[BaseException], value: BaseException, tb: TracebackType | None
+) -> None:
     while tb is not None and tb.tb_next is not None:
         tb = tb.tb_next
     if tb is None or "h5py" not in tb.tb_frame.f_code.co_filename:
@@ -98,7 +101,7 @@ def _quiet_hooks(on: bool) -> None:
 
 
 @contextlib.contextmanager
-def _quiet_h5py_failures():
+def _quiet_h5py_failures() -> Iterator[None]:
     """Around a write: the objects of a failed one are freed inside (where HDF5 itself
     failed, _end_without_hdf5_teardown keeps the hooks quiet for good)."""
     _quiet_hooks(True)
@@ -123,7 +126,9 @@ def _end_without_hdf5_teardown() -> None:
     atexit.register(leave)
 
 
-def check_writable(directory: Path, names: tuple[str, ...] = (RESULTS_FILE, CHECKPOINT_FILE)):
+def check_writable(
+    directory: Path, names: tuple[str, ...] = (RESULTS_FILE, CHECKPOINT_FILE)
+) -> None:
     """Refuse, before a run's set-up, a folder where its files cannot be written: a probe
     file is created (mkdir and the mode bits alone do not tell, e.g. for root on a
     read-only mount), the files already there are opened for writing, and a disk without
@@ -258,7 +263,7 @@ class ResultsFile:
     def _room_needed(self) -> int:
         """A new chunk for every dataset, and the metadata's flush."""
         chunks = sum(
-            int(np.prod(ds.chunks)) * ds.dtype.itemsize for ds in self._datasets() if ds.chunks
+            int(np.prod(ds.chunks)) * int(ds.dtype.itemsize) for ds in self._datasets() if ds.chunks
         )
         return chunks + MIN_FREE_BYTES
 

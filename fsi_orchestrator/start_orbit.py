@@ -37,11 +37,11 @@ MIN_SHAPE_ALIGNMENT = 0.9
 class LeadInSamples:
     """Interface z data on the structure's nodes at the end of lead-in windows."""
 
-    times_s: NDArray  # (n,)
-    displacement_z: NDArray  # (n, n_nodes)
-    velocity_z: NDArray
-    acceleration_z: NDArray
-    force_z: NDArray  # the fluid's force on the nodes
+    times_s: NDArray[np.float64]  # (n,)
+    displacement_z: NDArray[np.float64]  # (n, n_nodes)
+    velocity_z: NDArray[np.float64]
+    acceleration_z: NDArray[np.float64]
+    force_z: NDArray[np.float64]  # the fluid's force on the nodes
 
 
 @dataclass(frozen=True)
@@ -49,14 +49,15 @@ class ModalFit:
     """The fluid's force beyond the fast model, per node, as -p s'' - d s' + b along the
     motion s = e . u of a unit shape e."""
 
-    mass_z: NDArray = field(repr=False)  # (n_nodes,) p, N per m/s2 of s
-    damping_z: NDArray = field(repr=False)  # (n_nodes,) d, N per m/s of s, at amplitude_m
+    mass_z: NDArray[np.float64] = field(repr=False)  # (n_nodes,) p, N per m/s2 of s
+    # (n_nodes,) d, N per m/s of s, at amplitude_m
+    damping_z: NDArray[np.float64] = field(repr=False)
     amplitude_m: float  # amplitude of s over the samples
     residual: float  # rms misfit / rms of the fitted force (all nodes)
     alignment: float = float("nan")  # |cos| between corrected and fitted orbit shapes
     applied: bool = False  # the structure restarted on the corrected orbit
 
-    def summary(self, shape_z: NDArray) -> dict[str, float]:
+    def summary(self, shape_z: NDArray[np.float64]) -> dict[str, float]:
         """Modal values along e: the extra inertia e . p and damping e . d."""
         return {
             "applied": self.applied,
@@ -68,7 +69,9 @@ class ModalFit:
         }
 
 
-def fit_modal_force(samples: LeadInSamples, shape_z: NDArray, added_mass_z: NDArray) -> ModalFit:
+def fit_modal_force(
+    samples: LeadInSamples, shape_z: NDArray[np.float64], added_mass_z: NDArray[np.float64]
+) -> ModalFit:
     """Least-squares fit of each node's f + M~ a = -p s'' - d s' + b over the samples."""
     e = shape_z / np.linalg.norm(shape_z)
     extra = samples.force_z + samples.acceleration_z @ added_mass_z.T  # (n_t, n_nodes)
@@ -89,12 +92,12 @@ class StartOrbit(Protocol):
     """The structure's side of the start correction (built by the composition root)."""
 
     @property
-    def shape_z(self) -> NDArray:
+    def shape_z(self) -> NDArray[np.float64]:
         """(n_nodes,) the orbit's shape on the interface nodes' z."""
         ...
 
     @property
-    def added_mass_z(self) -> NDArray:
+    def added_mass_z(self) -> NDArray[np.float64]:
         """(n_nodes, n_nodes) the fast model's added mass the orbit was computed with."""
         ...
 

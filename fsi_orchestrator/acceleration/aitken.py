@@ -60,7 +60,7 @@ class AitkenRelaxation(Acceleration):
         self._scaling = FieldScaling(self.settings, self.layout)
         self._prev_r = None
 
-    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray[np.float64]:
         r = x_tilde - x
         self._scaling.update(r)
         self.omega = self._next_omega(r)
@@ -77,7 +77,9 @@ class AitkenRelaxation(Acceleration):
             return self.omega  # same residual twice: no new slope information
         return -self.omega * float(old @ dr) / denominator
 
-    def _converged(self, x: NDArray | None, x_tilde: NDArray | None) -> None:
+    def _converged(
+        self, x: NDArray[np.float64] | None, x_tilde: NDArray[np.float64] | None
+    ) -> None:
         self._prev_r = None
         self._scaling.end_window()
 
@@ -88,7 +90,7 @@ class AitkenRelaxation(Acceleration):
             **self._scaling.save_state(),
         }
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         super().load_state(state)
         self.omega = restored_scalar(state, "aitken_omega")
         self._prev_r = restored_optional(state, "aitken_prev_r", self.layout.size)

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 Fields = Mapping[str, NDArray[np.float64]]
-State = dict[str, NDArray]
+State = dict[str, NDArray[np.float64]]
 
 
 class AccelerationSettingsError(ValueError):
@@ -45,7 +45,9 @@ def check_relaxation(name: str, value: float) -> None:
         raise AccelerationSettingsError(f"{name} must be in (0, 1], got {value!r}")
 
 
-def apply_relaxation(omega: float, x: NDArray, x_tilde: NDArray) -> NDArray[np.float64]:
+def apply_relaxation(
+    omega: float, x: NDArray[np.float64], x_tilde: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Under-relaxation ``x^{k+1} = omega * x~^k + (1 - omega) * x^k``.
 
     Written as in preCICE's ``Acceleration::applyRelaxation``; ``omega = 1`` is the plain
@@ -184,12 +186,14 @@ class FieldScaling:
     def save_state(self) -> State:
         return {"scaling_weights": self.weights.copy(), "scaling_sums": self._sums.copy()}
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         self.weights = restored(state, "scaling_weights", self.weights.shape)
         self._sums = restored(state, "scaling_sums", self._sums.shape)
 
 
-def restored(state: Mapping[str, NDArray], key: str, shape: tuple[int, ...]) -> NDArray:
+def restored(
+    state: Mapping[str, NDArray[np.float64]], key: str, shape: tuple[int, ...]
+) -> NDArray[np.float64]:
     """A copy of ``state[key]``, checked against the expected shape."""
     if key not in state:
         raise AccelerationStateError(f"saved accelerator state lacks {key!r}")
@@ -201,7 +205,9 @@ def restored(state: Mapping[str, NDArray], key: str, shape: tuple[int, ...]) -> 
     return value
 
 
-def restored_optional(state: Mapping[str, NDArray], key: str, size: int) -> NDArray | None:
+def restored_optional(
+    state: Mapping[str, NDArray[np.float64]], key: str, size: int
+) -> NDArray[np.float64] | None:
     """A saved vector that may be absent (stored as an empty array), e.g. the last residual."""
     if key not in state:
         raise AccelerationStateError(f"saved accelerator state lacks {key!r}")
@@ -211,11 +217,11 @@ def restored_optional(state: Mapping[str, NDArray], key: str, size: int) -> NDAr
     return restored(state, key, (size,))
 
 
-def restored_scalar(state: Mapping[str, NDArray], key: str) -> float:
+def restored_scalar(state: Mapping[str, NDArray[np.float64]], key: str) -> float:
     return float(restored(state, key, ()))
 
 
-def optional_array(value: NDArray | None) -> NDArray:
+def optional_array(value: NDArray[np.float64] | None) -> NDArray[np.float64]:
     return np.empty(0) if value is None else value.copy()
 
 
@@ -252,7 +258,7 @@ class Acceleration(ABC):
         return self.layout.split(flat)
 
     @abstractmethod
-    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray[np.float64]:
         """``x^{k+1}`` on flat vectors."""
 
     def iterations_converged(self, x: Fields | None = None, x_tilde: Fields | None = None) -> None:
@@ -266,14 +272,16 @@ class Acceleration(ABC):
         else:
             self._converged(None, None)
 
-    def _converged(self, x: NDArray | None, x_tilde: NDArray | None) -> None:  # noqa: B027
+    def _converged(  # noqa: B027
+        self, x: NDArray[np.float64] | None, x_tilde: NDArray[np.float64] | None
+    ) -> None:
         """Window end on flat vectors; nothing to do by default."""
 
     def save_state(self) -> State:
         """Everything needed to continue bit-for-bit (copies)."""
         return {}
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         """Restore from :meth:`save_state` (copies; ``state`` is not changed)."""
         _ = self.layout  # raises unless initialized: the layout sizes the restored arrays
 

@@ -34,7 +34,7 @@ class ConstantRelaxation(Acceleration):
         super().__init__()
         self.settings = settings
 
-    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray[np.float64]:
         return apply_relaxation(self.settings.relaxation, x, x_tilde)
 
     def log_line(self) -> str:

@@ -77,13 +77,17 @@ class IQNILSAcceleration(BaseQNAcceleration):
         super().__init__(settings)
         self.h0 = h0
 
-    def _initial_step(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _initial_step(
+        self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         if self.h0 is None:
             return super()._initial_step(x, x_tilde)
         return x + self._apply_h0(x_tilde - x)
 
-    def _compute_qn_update(self, r: NDArray, q: NDArray, rf: NDArray) -> NDArray:
-        c = solve_triangular(rf, -(q.T @ (self._scaling.weights * r)))
+    def _compute_qn_update(
+        self, r: NDArray[np.float64], q: NDArray[np.float64], rf: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        c: NDArray[np.float64] = solve_triangular(rf, -(q.T @ (self._scaling.weights * r)))
         if self.h0 is None:
             return self._w @ c
         h0_v = np.column_stack([self._apply_h0(col) for col in self._v.T])

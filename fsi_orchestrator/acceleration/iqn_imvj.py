@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
-from .base import restored
+from .base import State, restored
 from .iqn_ils import IQNILSAcceleration, IQNILSSettings
 from .quasi_newton import qr2_filter
 
@@ -39,7 +39,9 @@ class IQNIMVJAcceleration(IQNILSAcceleration):
         # the first window's steps: relaxation omega_0 r where no secant has been seen
         self._jacobian = self.settings.initial_relaxation * np.eye(self.layout.size)
 
-    def _converged(self, x: NDArray | None, x_tilde: NDArray | None) -> None:
+    def _converged(
+        self, x: NDArray[np.float64] | None, x_tilde: NDArray[np.float64] | None
+    ) -> None:
         if x is not None and x_tilde is not None:
             self._add_secant(x_tilde - x, x_tilde)
         self._update_jacobian()
@@ -62,15 +64,15 @@ class IQNIMVJAcceleration(IQNILSAcceleration):
         correction = (w - v + self._jacobian @ v) @ solve_triangular(rf, q.T)
         self._jacobian = self._jacobian - correction * weights[None, :]
 
-    def warm_start(self, state: Mapping[str, NDArray]) -> None:
+    def warm_start(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         """Start from the Jacobian another run learned (its saved state): for a map that
         changes little between runs (the same structure at another drive) the first windows
         need not learn it again. Only the Jacobian is taken."""
         self._jacobian = restored(state, "imvj_jacobian", self._jacobian.shape)
 
-    def save_state(self):
+    def save_state(self) -> State:
         return {**super().save_state(), "imvj_jacobian": self._jacobian.copy()}
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         super().load_state(state)
         self._jacobian = restored(state, "imvj_jacobian", self._jacobian.shape)

@@ -100,13 +100,15 @@ def _check_int(name: str, value: int, *, minimum: int) -> None:
         raise AccelerationSettingsError(f"{name} must be an integer >= {minimum}, got {value!r}")
 
 
-def _saved(state: Mapping[str, NDArray], key: str) -> NDArray:
+def _saved(state: Mapping[str, NDArray[np.float64]], key: str) -> NDArray[np.float64]:
     if key not in state:
         raise AccelerationStateError(f"saved accelerator state lacks {key!r}")
     return np.array(state[key], dtype=float)  # a copy
 
 
-def qr2_filter(v: NDArray[np.float64], eps: float) -> tuple[NDArray, NDArray, list[int]]:
+def qr2_filter(
+    v: NDArray[np.float64], eps: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[int]]:
     """QR2 filter: ``v[:, kept] = Q R``, columns taken from the left.
 
     A column is kept when its part orthogonal to the columns kept before it is not small,
@@ -115,15 +117,21 @@ def qr2_filter(v: NDArray[np.float64], eps: float) -> tuple[NDArray, NDArray, li
     return _qr_filter(v, lambda diag, cols, _: diag <= eps * np.linalg.norm(cols, axis=0))
 
 
-def qr1_filter(v: NDArray[np.float64], eps: float) -> tuple[NDArray, NDArray, list[int]]:
+def qr1_filter(
+    v: NDArray[np.float64], eps: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[int]]:
     """QR1 filter: ``v[:, kept] = Q R`` with every ``|R_ii| >= eps ||R||_F``."""
     return _qr_filter(v, lambda diag, _, r: (diag < eps * np.linalg.norm(r)) | (diag == 0.0))
 
 
-Rejects = Callable[[NDArray, NDArray, NDArray], NDArray]
+Rejects = Callable[
+    [NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]
+]
 
 
-def _qr_filter(v: NDArray[np.float64], rejects: Rejects) -> tuple[NDArray, NDArray, list[int]]:
+def _qr_filter(
+    v: NDArray[np.float64], rejects: Rejects
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[int]]:
     """Householder QR; delete the leftmost rejected column and refactorize until none is.
 
     Deleting only the leftmost one per pass makes the QR2 test of a later column refer to the
@@ -164,11 +172,11 @@ class BaseQNAcceleration(Acceleration):
         return self._v.shape[1]
 
     @property
-    def matrices(self) -> tuple[NDArray, NDArray]:
+    def matrices(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Copies of ``(V, W)``, newest column first (for inspection and tests)."""
         return self._v.copy(), self._w.copy()
 
-    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _perform(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray[np.float64]:
         r = x_tilde - x
         self._scaling.update(r)
         self._add_secant(r, x_tilde)
@@ -177,11 +185,15 @@ class BaseQNAcceleration(Acceleration):
             return self._initial_step(x, x_tilde)
         return x_tilde + self._compute_qn_update(r, q, rf)
 
-    def _initial_step(self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> NDArray:
+    def _initial_step(
+        self, x: NDArray[np.float64], x_tilde: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         return apply_relaxation(self.settings.initial_relaxation, x, x_tilde)
 
     @abstractmethod
-    def _compute_qn_update(self, r: NDArray, q: NDArray, rf: NDArray) -> NDArray:
+    def _compute_qn_update(
+        self, r: NDArray[np.float64], q: NDArray[np.float64], rf: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         """``x^{k+1} - x~^k`` from the residual and the QR factors of the scaled ``P V``."""
 
     def _add_secant(self, r: NDArray[np.float64], x_tilde: NDArray[np.float64]) -> None:
@@ -194,7 +206,7 @@ class BaseQNAcceleration(Acceleration):
             self._window_cols[0] += 1
         self._prev_r, self._prev_xt = r, x_tilde
 
-    def _filtered_qr(self) -> tuple[NDArray, NDArray]:
+    def _filtered_qr(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """QR of the scaled ``P V`` after deleting the columns the filter rejects."""
         scaled = self._scaling.weights[:, None] * self._v
         if self.settings.filter is QRFilter.QR1:
@@ -214,7 +226,9 @@ class BaseQNAcceleration(Acceleration):
         if self._window_cols[window] == 0 and window > 0:
             del self._window_cols[window]
 
-    def _converged(self, x: NDArray | None, x_tilde: NDArray | None) -> None:
+    def _converged(
+        self, x: NDArray[np.float64] | None, x_tilde: NDArray[np.float64] | None
+    ) -> None:
         if x is not None and x_tilde is not None:
             self._add_secant(x_tilde - x, x_tilde)
         self._prev_r = self._prev_xt = None
@@ -239,7 +253,7 @@ class BaseQNAcceleration(Acceleration):
             **self._scaling.save_state(),
         }
 
-    def load_state(self, state: Mapping[str, NDArray]) -> None:
+    def load_state(self, state: Mapping[str, NDArray[np.float64]]) -> None:
         super().load_state(state)
         n = self.layout.size
         v, w, saved_cols = (_saved(state, k) for k in ("qn_v", "qn_w", "qn_window_cols"))
