@@ -6,10 +6,10 @@ against more converged evaluations of it.
   most 10 min).
 
 For each study's best design the objective is evaluated again (a) with the shell and the
-potential fluid one mesh level finer (``default``) and (b) by the time march of fsi-run on the
-coarse meshes (40 steps per period, 3 periods from the periodic start); the relative
-differences are the fast evaluation's error against those. Writes ``OUTPUT/design_study.json``
-and prints it.
+potential fluid one mesh level finer (shell ``fine``, fluid ``default``) and (b) by the time
+march of fsi-run on the study's own meshes (40 steps per period, 3 periods from the periodic
+start); the relative differences are the fast evaluation's error against those. Writes
+``OUTPUT/design_study.json`` and prints it.
 
     python benchmarks/design_study.py --workers 2 --output /tmp/design_bench
     python benchmarks/design_study.py --only fig5_5_peduncle
@@ -48,7 +48,7 @@ def converged_errors(best_case: Path, quantity: str, fast: float) -> dict:
     from fsi_orchestrator.case import load_case
     from fsi_orchestrator.design.evaluate import linear_figures, transient_figures
 
-    finer = load_case(best_case, ["mesh.level=default", "fluid.mesh_level=default"])
+    finer = load_case(best_case, ["mesh.level=fine", "fluid.mesh_level=default"])
     start = time.perf_counter()
     fine = linear_figures(finer)[quantity]
     fine_s = time.perf_counter() - start
