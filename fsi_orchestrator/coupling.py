@@ -52,6 +52,10 @@ from .participant import (
     FORCE,
     PAST_DISPLACEMENT,
     VELOCITY,
+    FollowsMotion,
+    HasAccelerationStencil,
+    InitializesData,
+    OnPeriodicOrbit,
     Participant,
     ParticipantSetupError,
 )
@@ -253,9 +257,12 @@ class Coupling:
         converged to different runs (0.17 mm, 19 % of the force apart). The predictor takes
         it as its first value. With it go the displacements the fluid was moved through,
         which a fluid-consistent added-mass acceleration differentiates."""
-        initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
-        stencil = getattr(self.fluid, "acceleration_stencil", None)
-        if initialize is not None:
+        stencil = (
+            self.fluid.acceleration_stencil
+            if isinstance(self.fluid, HasAccelerationStencil)
+            else None
+        )
+        if isinstance(solid, InitializesData):
             past = np.array([motion(-k * dt) for k in range(1, PAST_WINDOWS + 1)])
             history = {PAST_DISPLACEMENT: past}
             if stencil is not None and self.added_mass_z is not None:
@@ -266,7 +273,7 @@ class Coupling:
                 history[ACCELERATION] = (
                     sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
                 )
-            initialize(history)
+            solid.initialize_data(history)
         self._start_from_fluid_force(solid)
 
     def _start_from_fluid_force(self, solid: Participant) -> None:
@@ -276,9 +283,8 @@ class Coupling:
         x = self.mapping.conservative(self.fluid.write_data()[FORCE])
         if self.added_mass_z is not None:
             x[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
-        initialize = getattr(solid, "initialize_data", None)  # optional in the protocol
-        if initialize is not None:
-            initialize({FORCE: x})
+        if isinstance(solid, InitializesData):
+            solid.initialize_data({FORCE: x})
         self.predictor.restart(solid.time, {FIELD: x})
 
     def _follow(
@@ -287,9 +293,9 @@ class Coupling:
         """The fluid alone through a prescribed interface motion u(t) (solid nodes), window by
         window, or all at once by a fluid that can (optional ``follow(displacements, dt)``:
         OpenFOAM runs them in one launch). Samples from ``record_from`` on."""
-        follow = getattr(self.fluid, "follow", None)
-        if follow is not None:
-            forces = self._in_fluid(follow, [self.mapping.consistent(motion(t)) for t in times], dt)
+        if isinstance(self.fluid, FollowsMotion):
+            moved = [self.mapping.consistent(motion(t)) for t in times]
+            forces = self._in_fluid(self.fluid.follow, moved, dt)
         else:
             forces = [self._prescribed_window(motion, t, dt) for t in times]
         if record_from is None:
@@ -488,8 +494,7 @@ def _periodic_motion(solid: Participant, omega: float) -> Motion:
     """u(t): the interface motion on the periodic orbit the structure starts on now, with all
     its harmonics (``orbit_motion``, optional in the protocol); else the harmonic
     u0 cos wt + v0/w sin wt through its state at t = 0."""
-    orbit_motion: Callable[[], Motion | None] | None = getattr(solid, "orbit_motion", None)
-    on_orbit = orbit_motion() if orbit_motion is not None else None
+    on_orbit = solid.orbit_motion() if isinstance(solid, OnPeriodicOrbit) else None
     if on_orbit is not None:
         return on_orbit
     state = solid.write_data()

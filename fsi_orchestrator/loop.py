@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .coupling import Coupling
-from .participant import DISPLACEMENT, Participant
+from .participant import DISPLACEMENT, Monitored, Participant, WritesFlowFields
 from .provenance import IDENTITY_ATTR, identity_changes
 from .results import (
     CHECKPOINT_FILE,
@@ -156,9 +156,8 @@ class WindowLoop:
     ) -> dict[str, object]:
         row: dict[str, object] = {"time_s": self.solid.time, "wall_s": wall_s, **stats}
         for name, p in self.participants.items():
-            monitor = getattr(p, "monitor", None)
-            if monitor is not None:
-                row.update({f"{name}/{k}": v for k, v in monitor().items()})
+            if isinstance(p, Monitored):
+                row.update({f"{name}/{k}": v for k, v in p.monitor().items()})
         results.append(row)
         if vtk and self.window % self.output.vtk_every == 0:
             for name, series in vtk.items():
@@ -178,9 +177,9 @@ class WindowLoop:
         """Flow fields a fluid writes itself (e.g. OpenFOAM's slices), moved into the PVD
         series. A failure costs the pictures, not the run: one warning, no more attempts."""
         for p in self.participants.values():
-            sample = getattr(p, "flow_fields", None)
-            if sample is None:
+            if not isinstance(p, WritesFlowFields):
                 continue
+            sample = p.flow_fields
             try:
                 files = sample()
             except RuntimeError as err:

@@ -7,19 +7,17 @@ libraries. What crosses the boundary: numpy arrays on an :class:`InterfaceMesh`.
 A window goes ``read_data -> solve(dt) -> write_data``. Implicit coupling stores a checkpoint at
 the start of the window and restores it before solving the window again with new data.
 
-Optional members, looked up with getattr: ``initialize_data(data)`` (the exchanged values at the
-initial time), ``monitor()`` (scalars and small arrays for results.h5), ``flow_fields()`` (files
-such as flow slices for the PVD series: {series name: path}) and, on a fluid,
-``acceleration_stencil`` (how it differentiates the window-end displacements it is given:
-a = sum_j c_j u_(n+1-j) / dt^2), which the added-mass schemes use, and
-``follow(displacements, dt)`` (prescribed windows in one go, returning each one's nodal
-forces: the lead-in).
+Optional capabilities are Protocols of their own, checked with ``isinstance``:
+:class:`InitializesData`, :class:`Monitored`, :class:`WritesFlowFields`, and on a fluid
+:class:`HasAccelerationStencil` (used by the added-mass schemes) and :class:`FollowsMotion`
+(the lead-in); on a structure :class:`OnPeriodicOrbit` (the periodic start).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -97,3 +95,50 @@ class Participant(Protocol):
     def load_state(self, state: State) -> None: ...
 
     def finalize(self) -> None: ...
+
+
+@runtime_checkable
+class InitializesData(Protocol):
+    """Takes the exchanged values at the initial time (e.g. the fluid's force after a lead-in)."""
+
+    def initialize_data(self, data: Mapping[str, NDArray[Any]]) -> None: ...
+
+
+@runtime_checkable
+class Monitored(Protocol):
+    """Scalars and small arrays per window, for results.h5."""
+
+    def monitor(self) -> Mapping[str, NDArray[Any] | float]: ...
+
+
+@runtime_checkable
+class WritesFlowFields(Protocol):
+    """Writes files such as flow slices for the PVD series: {series name: path}."""
+
+    def flow_fields(self) -> Mapping[str, Path]: ...
+
+
+@runtime_checkable
+class HasAccelerationStencil(Protocol):
+    """A fluid that differentiates the window-end displacements it is given as
+    a = sum_j c_j u_(n+1-j) / dt^2 (None: it does not say)."""
+
+    @property
+    def acceleration_stencil(self) -> tuple[float, ...] | None: ...
+
+
+@runtime_checkable
+class FollowsMotion(Protocol):
+    """A fluid that runs prescribed windows in one go, returning each one's nodal forces."""
+
+    def follow(
+        self, displacements: Sequence[NDArray[np.float64]], dt: float
+    ) -> list[NDArray[np.float64]]: ...
+
+
+@runtime_checkable
+class OnPeriodicOrbit(Protocol):
+    """A structure started on a periodic orbit: its interface motion u(t) with all harmonics
+    (None: not on one)."""
+
+    def orbit_motion(self) -> Callable[[float], NDArray[np.float64]] | None: ...

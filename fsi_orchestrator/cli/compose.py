@@ -12,7 +12,7 @@ import numpy as np
 
 from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
-from ..participant import Participant
+from ..participant import HasAccelerationStencil, Participant
 
 if TYPE_CHECKING:
     from ..coupling import Coupling
@@ -209,7 +209,9 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
         assert true_added_mass is not None  # no fluid factory: the fast fluid, coupled
         fluid = PotentialParticipant(true_added_mass, solid.interface())
     if settings.uses_added_mass:  # M~ weighted with the fluid's own discrete acceleration
-        model.added_mass_stencil = getattr(fluid, "acceleration_stencil", None)
+        model.added_mass_stencil = (
+            fluid.acceleration_stencil if isinstance(fluid, HasAccelerationStencil) else None
+        )
     start = None
     if case.coupling.start_correction and settings.lead_in_windows > 0:
         start = CorrectableStart(case, model, solid, estimate.matrix)
