@@ -27,8 +27,8 @@ import time
 from pathlib import Path
 
 from fluid_adapter.openfoam import build_openfoam_participant
-from fluid_adapter.openfoam.prescribed import mode_motion
 from fsi_orchestrator.case.loader import case_from_dict
+from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE
 
 WINDOWS_PER_PERIOD = 40

@@ -25,10 +25,10 @@ from fluid_adapter.openfoam.drivers import run_batch
 from fluid_adapter.openfoam.fishmesh import FISH_PATCHES
 from fluid_adapter.openfoam.foamrun import FoamRun, numeric_dirs
 from fluid_adapter.openfoam.interface import read_interface
-from fluid_adapter.openfoam.prescribed import mode_motion
 from fluid_adapter.openfoam.tankcase import flow_settings
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE
 
 pytestmark = [

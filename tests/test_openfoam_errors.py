@@ -19,9 +19,9 @@ from fluid_adapter.openfoam import (
 )
 from fluid_adapter.openfoam.checkmesh import check_mesh
 from fluid_adapter.openfoam.foamio import read_points, update_dict, write_dict
-from fluid_adapter.openfoam.prescribed import mode_motion
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
+from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT
 
 needs_openfoam = pytest.mark.skipif(

@@ -15,9 +15,9 @@ import pytest
 
 from fluid_adapter.openfoam.fishmesh import LEVELS, tank_geometry, tank_topology
 from fluid_adapter.openfoam.motion import max_safe_amplitude
-from fluid_adapter.openfoam.prescribed import LARGEST_TAIL_AMPLITUDE_M, check_motion
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import MeshLevel
+from fsi_orchestrator.cli.prescribed import LARGEST_TAIL_AMPLITUDE_M, check_motion
 
 needs_openfoam = pytest.mark.skipif(
     shutil.which("pimpleFoam") is None, reason="OpenFOAM not installed"

@@ -28,7 +28,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case, CaseError
-from fsi_orchestrator.case.schema import GeometryKind, MeshLevel
+from fsi_orchestrator.case.planform import planform
+from fsi_orchestrator.case.schema import MeshLevel
 
 from .grading import Spacing, graded, two_sided, uniform
 
@@ -87,24 +88,18 @@ class TankGeometry:
 
 
 def tank_geometry(case: Case) -> TankGeometry:
-    from solid_adapter.geometry import build_layout, resolve_fish
-
     fl = case.fluid
-    layout = build_layout(case)
-    length = layout.length_m
+    plate = planform(case)
+    length = plate.length_m
     nose = fl.tank_nose_x_m if fl.tank_nose_x_m is not None else (fl.tank_length_m - length) / 2
-    breaks: tuple[float, ...] = (0.0, length)
-    if case.geometry.kind is GeometryKind.FISH:
-        p = resolve_fish(case)
-        breaks = (0.0, p.head_length_m, p.taper_start_x_m, p.peduncle_x_m, length)
     return TankGeometry(
         x_front=-nose,
         x_back=fl.tank_length_m - nose,
         depth=fl.tank_depth_m,
         width=fl.tank_width_m,
         length=length,
-        plate_breaks=breaks,
-        height=layout.height,
+        plate_breaks=plate.kinks_m,
+        height=plate.height,
     )
 
 

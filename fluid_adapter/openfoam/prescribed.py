@@ -1,24 +1,25 @@
-"""Prescribed (one-way) plate kinematics: the clamped fish's first mode times sin(2 pi f t).
+"""Prescribed (one-way) plate kinematics: a mode shape times sin(2 pi f t).
 
-The mode comes from the shell solver (``case.boundary.head = "clamped"``, in vacuum): its nodal
-translations (u_x, u_y, u_z) are interpolated linearly from the shell's nodes to any point of
-the planform and scaled so that the tail tip (trailing edge at y = 0) moves ``amplitude_m``
-along z. Default amplitude: the seed's acoustic-model tail amplitude at 3 Hz, about 20 mm
-(Sec. 3.4.3, Fig. 3.17; shared/reference/seed_data.toml, robot_original.transient_acoustic).
+The shape comes in as a callable, points (n, 2|3) -> translations (u_x, u_y, u_z) (n, 3),
+scaled so that the tail tip (trailing edge at y = 0) moves 1 m along z; the motion moves it
+``amplitude_m``. The composition root hands in the clamped fish's first mode from the shell
+solver (fsi_orchestrator/cli/prescribed.py). Default amplitude: the seed's acoustic-model tail
+amplitude at 3 Hz, about 20 mm (Sec. 3.4.3, Fig. 3.17; shared/reference/seed_data.toml,
+robot_original.transient_acoustic).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import HeadCondition
+from fsi_orchestrator.case.planform import planform
 
 from .checkmesh import MeshQuality
 from .drivers import run_batch, run_mesh_motion
@@ -29,29 +30,8 @@ ACOUSTIC_TAIL_AMPLITUDE_M = 0.020  # seed Sec. 3.4.3 / Fig. 3.17, "near to 20 mm
 LARGEST_TAIL_AMPLITUDE_M = 0.040  # issue 4: the seed's largest tail motion, about +-40 mm
 
 
-def first_mode(case: Case) -> tuple[NDArray, NDArray]:
-    """Shell node positions (n, 2) and the first clamped mode's translations (n, 3), scaled
-    to +1 m of z displacement at the tail tip."""
-    from solid_adapter.build import build_shell_model
-    from solid_adapter.shell import NDOF
-    from solid_adapter.solvers import modal_analysis
-
-    clamped = replace(case, boundary=replace(case.boundary, head=HeadCondition.CLAMPED))
-    model = build_shell_model(clamped)
-    shape = modal_analysis(model, 1).shapes[0].reshape(-1, NDOF)[:, :3]
-    tip = model.mesh.nearest_node(*model.layout.tip_point)
-    return model.mesh.nodes.copy(), shape / shape[tip, 2]
-
-
-def mode_on_points(nodes: NDArray, shape: NDArray, points: NDArray) -> NDArray:
-    """Interpolate a nodal shape to points of the planform (x, y[, z]); nearest value where a
-    point falls outside the shell nodes' triangulation (round-off at the outline)."""
-    xy = points[:, :2]
-    linear = LinearNDInterpolator(nodes, shape)(xy)
-    outside = np.isnan(linear[:, 0])
-    if outside.any():
-        linear[outside] = NearestNDInterpolator(nodes, shape)(xy[outside])
-    return linear
+# the unit mode shape on points: (n, 2|3) -> (n, 3), tail tip z = 1
+ShapeOnPoints = Callable[[NDArray], NDArray]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -77,17 +57,16 @@ class ModeMotion:
 
 
 def mode_motion(
-    case: Case,
+    shape: ShapeOnPoints,
     points: NDArray,
-    amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
-    frequency_hz: float | None = None,
+    amplitude_m: float,
+    frequency_hz: float,
     ramp_periods: float = 0.0,
 ) -> ModeMotion:
-    nodes, shape = first_mode(case)
     return ModeMotion(
-        shape=mode_on_points(nodes, shape, points),
+        shape=shape(points),
         amplitude_m=amplitude_m,
-        frequency_hz=frequency_hz or case.actuation.frequency_hz,
+        frequency_hz=frequency_hz,
         ramp_periods=ramp_periods,
     )
 
@@ -133,6 +112,7 @@ def _prepare(
 def run_prescribed(
     case: Case,
     workdir: Path,
+    shape: ShapeOnPoints,
     *,
     amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
     periods: float = 2.0,
@@ -142,12 +122,12 @@ def run_prescribed(
     frequency_hz: float | None = None,
     write_every: int | None = None,
 ) -> PrescribedResult:
-    """One-way run: the fish moves in its first clamped mode, one pimpleFoam launch."""
+    """One-way run: the fish moves in ``shape``, one pimpleFoam launch."""
     f = frequency_hz or case.actuation.frequency_hz
     dt, n = 1.0 / (f * steps_per_period), round(periods * steps_per_period)
     start = time.perf_counter()
     run, quality = _prepare(case, workdir, dt, mesh_scale)
-    motion = mode_motion(case, run.interface.points0, amplitude_m, f, ramp_periods)
+    motion = mode_motion(shape, run.interface.points0, amplitude_m, f, ramp_periods)
     history = run_batch(run, motion.displacement, dt, n, write_every=write_every)
     return PrescribedResult(
         times_s=np.array([h.time for h in history]),
@@ -163,6 +143,7 @@ def run_prescribed(
 def check_motion(
     case: Case,
     workdir: Path,
+    shape: ShapeOnPoints,
     *,
     amplitude_m: float = LARGEST_TAIL_AMPLITUDE_M,
     periods: float = 2.0,
@@ -176,31 +157,30 @@ def check_motion(
     f = frequency_hz or case.actuation.frequency_hz
     dt, n = 1.0 / (f * steps_per_period), round(periods * steps_per_period)
     run, quality = _prepare(case, workdir, dt, mesh_scale)
-    motion = mode_motion(case, run.interface.points0, amplitude_m, f, ramp_periods)
+    motion = mode_motion(shape, run.interface.points0, amplitude_m, f, ramp_periods)
     counts = (quality.cells, quality.points)
     return quality, run_mesh_motion(run, motion.displacement, dt, n, counts)
 
 
 def slender_body_estimate(
     case: Case,
+    shape: ShapeOnPoints,
     amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
     frequency_hz: float | None = None,
     n_x: int = 120,
     n_t: int = 64,
 ) -> float:
-    """Mean thrust (N) of the same first-mode motion from Lighthill's elongated-body theory
+    """Mean thrust (N) of the same motion from Lighthill's elongated-body theory
     (fluid_adapter.slender_body, fixed head): the CFD's first check."""
     from fluid_adapter.slender_body import slender_body_thrust
-    from solid_adapter.geometry import build_layout
 
     f = frequency_hz or case.actuation.frequency_hz
-    layout = build_layout(case)
-    x = np.linspace(0.0, layout.length_m, n_x)
-    nodes, shape = first_mode(case)
-    midline = mode_on_points(nodes, shape, np.column_stack([x, 0 * x]))[:, 2]
+    plate = planform(case)
+    x = np.linspace(0.0, plate.length_m, n_x)
+    midline = shape(np.column_stack([x, 0 * x]))[:, 2]
     t = np.arange(n_t) / (n_t * f)
     h = amplitude_m * np.sin(2 * np.pi * f * t)[:, None] * midline[None, :]
     history = slender_body_thrust(
-        x, layout.height(x) / 2, h, t[1], density_kg_m3=case.fluid.density_kg_m3
+        x, plate.height(x) / 2, h, t[1], density_kg_m3=case.fluid.density_kg_m3
     )
     return history.mean_thrust_n

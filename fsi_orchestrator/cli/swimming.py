@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..case import Case
+from ..case.planform import resolve_fish
 from .compose import without_cfd
 
 if TYPE_CHECKING:
@@ -105,7 +106,6 @@ class SwimmingModel:
 def swimming_model(case: Case, model, x_m: NDArray) -> SwimmingModel:
     """The case's swimming model on the shell ``model``'s midline nodes ``x_m``."""
     from fluid_adapter.swimming import BodyDrag, FormDrag
-    from solid_adapter.geometry import resolve_fish
 
     s, fluid = case.swimming, case.fluid
     mass, x_cm, volume = _mass_and_volume(model)

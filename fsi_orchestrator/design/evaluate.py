@@ -30,6 +30,7 @@ import numpy as np
 
 from ..case import Case, CaseError
 from ..case.loader import CASE_FILE, case_from_dict, merge_overrides
+from ..case.planform import resolve_fish
 from ..case.schema import AnalysisKind, FluidModel, GeometryKind
 from ..cli.sweep import atomic_write  # one atomic writer for every table and record
 from .study import (
@@ -163,8 +164,6 @@ def resolved_value(case: Case, key: str, values: dict) -> float:
     section, _, name = key.partition(".")
     value = getattr(getattr(case, section), name)
     if value is None and section == "geometry" and case.geometry.kind is GeometryKind.FISH:
-        from solid_adapter.geometry import resolve_fish
-
         value = getattr(resolve_fish(case), name, None)
     if value is None:
         raise CaseError(f"constraint: {key} has no value in this case (give it in the base)")
