@@ -18,8 +18,9 @@ from fluid_adapter.openfoam.turek_cfd3 import (
     DRAG_MEAN_REF,
     FREQUENCY_REF_HZ,
     LIFT_AMPLITUDE_REF,
+    Kick,
     run_cfd3,
-    run_cfd3_from,
+    run_cfd3_models,
     shedding_statistics,
 )
 from fsi_orchestrator.case.schema import Turbulence
@@ -49,14 +50,13 @@ BODY_SIZE = 4e-3  # m at the body (CFD1 uses 2.5e-3): 9.5k cells, ~1 ms steps at
 
 @pytest.fixture(scope="module")
 def shedding(tmp_path_factory):
-    """Laminar from rest to 6 s (the shedding develops from ~2.5 s), then each model continues
-    the same developed flow for 1.5 s; statistics over the last 4 periods of each."""
+    """Laminar from rest to 3 s, kicked into shedding from 0.6 s (left alone it develops from
+    ~2.5 s and needs 6 s), then each model continues the same developed flow for 1.5 s, the
+    three side by side; statistics over the last 4 periods of each."""
     root = tmp_path_factory.mktemp("cfd3")
-    run_cfd3(root / "precursor", body_size=BODY_SIZE, end_time_s=6.0)
-    return {
-        model: run_cfd3_from(root / "precursor", root / model.value, turbulence=model)
-        for model in (Turbulence.LAMINAR, Turbulence.WALE, Turbulence.SMAGORINSKY)
-    }
+    run_cfd3(root / "precursor", body_size=BODY_SIZE, end_time_s=3.0, kick=Kick())
+    models = (Turbulence.LAMINAR, Turbulence.WALE, Turbulence.SMAGORINSKY)
+    return run_cfd3_models(root / "precursor", root, models)
 
 
 @pytest.mark.parametrize("model", [Turbulence.LAMINAR, Turbulence.WALE])
