@@ -33,6 +33,7 @@ from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
 from fsi_orchestrator.loop import OutputSettings, Schedule, WindowLoop  # noqa: E402
 from fsi_orchestrator.participant import DISPLACEMENT, PAST_DISPLACEMENT, VELOCITY  # noqa: E402
 from solid_adapter.build import build_shell_model  # noqa: E402
+from solid_adapter.solvers import AddedMassAsForce  # noqa: E402
 
 SCHEMES = ("explicit", "constant", "aitken", "iqn-ils", "iqn-ils-am", "explicit-am")
 # the fluid's and the preconditioner's potential-flow meshes: a different discretisation plays
@@ -130,8 +131,8 @@ def run(
         explicit_periods=explicit_periods,
     )
     solid, coupling = coupled_setup(case, fluid_factory)
-    if not structure_stencil:
-        solid.model.added_mass_stencil = None
+    if not structure_stencil and solid.integrator.added_mass_as_force is not None:
+        solid.integrator.added_mass_as_force = AddedMassAsForce(stencil=None)
     schedule = Schedule(dt=1 / (DRIVE_HZ * steps), n_windows=n_windows)
     with tempfile.TemporaryDirectory() as tmp:
         loop = WindowLoop(

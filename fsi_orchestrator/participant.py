@@ -10,7 +10,8 @@ the start of the window and restores it before solving the window again with new
 Optional capabilities are Protocols of their own, checked with ``isinstance``:
 :class:`InitializesData`, :class:`Monitored`, :class:`WritesFlowFields`, and on a fluid
 :class:`HasAccelerationStencil` (used by the added-mass schemes) and :class:`FollowsMotion`
-(the lead-in); on a structure :class:`OnPeriodicOrbit` (the periodic start).
+(the lead-in); on a structure :class:`OnPeriodicOrbit` (the periodic start) and
+:class:`TakesAddedMass` (the added-mass schemes' preconditioning).
 """
 
 from __future__ import annotations
@@ -142,3 +143,26 @@ class OnPeriodicOrbit(Protocol):
     (None: not on one)."""
 
     def orbit_motion(self) -> Callable[[float], NDArray[np.float64]] | None: ...
+
+
+@dataclass(frozen=True, kw_only=True)
+class AddedMassPreconditioning:
+    """How a structure takes the preconditioning added mass of the *-am coupling schemes.
+
+    ``added_mass_z`` (M~, n x n on the interface nodes' normal accelerations, already scaled by
+    coupling.added_mass_scale) joins the structure's inertia and stands for part of the exchanged
+    force g = f + M~ a, so the structure weights it in time like that force. ``stencil``: how the
+    fluid differentiates the displacements it is given (:class:`HasAccelerationStencil`), with
+    which the structure forms the acceleration M~ multiplies, so that g holds the fluid's own;
+    None: the structure's own acceleration."""
+
+    added_mass_z: NDArray[np.float64]
+    stencil: tuple[float, ...] | None = None
+
+
+@runtime_checkable
+class TakesAddedMass(Protocol):
+    """A structure that carries the coupling's preconditioning added mass (None: none, the plain
+    schemes)."""
+
+    def take_added_mass(self, preconditioning: AddedMassPreconditioning | None) -> None: ...

@@ -287,13 +287,14 @@ class CorrectableStart:
     @contextmanager
     def _start_inertia(self):
         """The model as the periodic start saw it: the fast added mass in the inertia."""
-        saved = (self.model.added_mass, self.model.inertia, self.model.added_mass_as_force)
+        integrator = self.solid.integrator
+        saved = (self.model.added_mass, self.model.inertia, integrator.added_mass_as_force)
         self.model.set_added_mass(self._added_mass_z)
-        self.model.added_mass_as_force = False
+        integrator.added_mass_as_force = None
         try:
             yield
         finally:
-            self.model.added_mass, self.model.inertia, self.model.added_mass_as_force = saved
+            self.model.added_mass, self.model.inertia, integrator.added_mass_as_force = saved
 
 
 @dataclass(frozen=True)

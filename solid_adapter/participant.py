@@ -21,13 +21,14 @@ from fsi_orchestrator.participant import (
     PAST_DISPLACEMENT,
     PRESSURE,
     VELOCITY,
+    AddedMassPreconditioning,
     InterfaceMesh,
     State,
 )
 
 from .harmonic import PeriodicResponse
 from .shell import NDOF, ShellModel
-from .solvers import DynamicState, TimeIntegrator
+from .solvers import AddedMassAsForce, DynamicState, TimeIntegrator
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,16 @@ class ShellParticipant:
             self.state.t, self.external_load, self.volts, *orbit.at(self.state.t)
         )
         self._checkpoint, self._answer = None, None
+
+    def take_added_mass(self, preconditioning: AddedMassPreconditioning | None) -> None:
+        """Carry the *-am schemes' preconditioning added mass: in the inertia, and taken by the
+        integrator as part of the exchanged force (solvers.AddedMassAsForce); None: neither."""
+        if preconditioning is None:
+            self.model.set_added_mass(None)
+            self.integrator.added_mass_as_force = None
+            return
+        self.model.set_added_mass(preconditioning.added_mass_z)
+        self.integrator.added_mass_as_force = AddedMassAsForce(preconditioning.stencil)
 
     def orbit_motion(self) -> Callable[[float], NDArray] | None:
         """t -> the nodes' translations (n, 3) on the periodic orbit the structure starts on

@@ -133,14 +133,9 @@ class ShellModel:
         self.area_matrix = self._scalar_mass(np.ones_like(mesh.full.weights))
         self.support = self._support_springs()
         self.mass = self._mass_matrix()
+        # a fluid's added mass in the inertia (in partitioned *-am coupling the integrator
+        # takes it as part of the exchanged force: solvers.AddedMassAsForce)
         self.added_mass: sp.csr_matrix | None = None
-        # True in partitioned *-am coupling: the added mass stands for part of the exchanged
-        # force and is time-weighted like it (solvers.GeneralizedAlphaIntegrator)
-        self.added_mass_as_force = False
-        # ... and, set with it, how the fluid differentiates the displacements it is given:
-        # a_fluid = sum_j c_j x_(n+1-j) / dt^2 (Participant.acceleration_stencil); None: the
-        # integrator's own acceleration
-        self.added_mass_stencil: tuple[float, ...] | None = None
         self.inertia = self.mass  # structural mass plus any fluid added mass
         # a fast fluid's damping (force(model, x, v), linear(model, orbit)) beside its added
         # mass: the edge drag of fluid_adapter.drag; None: none

@@ -365,7 +365,7 @@ class DynamicState:
     f_int: NDArray  # internal force at (x, volts(t))
     f_ext: NDArray  # external force at (t, x)
     f_damp: NDArray  # damping force at (x, v)
-    # With a fluid-consistent added-mass stencil (ShellModel.added_mass_stencil): the
+    # With a fluid-consistent added-mass stencil (AddedMassAsForce.stencil): the
     # displacements at the previous step ends, most recent first, and the acceleration the
     # stencil gave at t (None: the state's own a stands for it)
     past: tuple[NDArray, ...] = ()
@@ -386,7 +386,7 @@ class DynamicState:
 
     @property
     def added_mass_acceleration(self) -> NDArray:
-        """The acceleration the added mass is weighted with (see added_mass_stencil)."""
+        """The acceleration the added mass is weighted with (see AddedMassAsForce)."""
         return self.a if self.a_fluid is None else self.a_fluid
 
 
@@ -470,8 +470,20 @@ class CombinedDamping:
         return sum(p.linear(model, orbit) for p in self.parts)
 
 
+@dataclass(frozen=True)
+class AddedMassAsForce:
+    """The model's added mass M~ stands for part of a partitioned coupling's exchanged force
+    g = f + M~ a (the *-am schemes): generalized-alpha weights it at alpha_f like that force,
+    with the acceleration a_fluid = sum_j c_j x_(n+1-j) / dt^2 the fluid forms from the same
+    displacements (``stencil``, Participant.acceleration_stencil; None: the integrator's own a).
+    """
+
+    stencil: tuple[float, ...] | None = None
+
+
 class TimeIntegrator:
-    """One implicit step at a time; the caller owns the state (so checkpoints are trivial)."""
+    """One implicit step at a time; the caller owns the state (so checkpoints are trivial).
+    ``added_mass_as_force``: how the model's added mass enters (None: as inertia)."""
 
     def __init__(
         self,
@@ -482,6 +494,7 @@ class TimeIntegrator:
         self.model, self.damping, self.settings = model, damping, settings
         self.newton_iterations = 0
         self.kept_tangent = KeptTangent()  # used with settings.reuse_tangent
+        self.added_mass_as_force: AddedMassAsForce | None = None
 
     def initial_state(
         self,
@@ -600,12 +613,12 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         # the two M~ terms would leave (alpha_f - alpha_m) M~ (a_k - a_k-1) behind - with M~ ~50
         # plate masses a spurious term that made converged coupled runs oscillate and grow.
         # Weighting M~ at alpha_f too makes the converged windows exactly M_s a + K u = f.
-        as_force = m.added_mass is not None and getattr(m, "added_mass_as_force", False)
+        as_force = self.added_mass_as_force if m.added_mass is not None else None
         # ... and weighting it with the acceleration the fluid computes from the same
         # displacements (a_fluid = c0 x1 + known) keeps g = f + M~ a_fluid free of the
         # difference between the two discrete accelerations, which explicit-am fed back
         # window to window (a period-3 instability, docs/coupling.md)
-        coeffs = getattr(m, "added_mass_stencil", None) if as_force and stencil else None
+        coeffs = as_force.stencil if as_force is not None and stencil else None
         if coeffs is not None:
             past = _padded_past(s, len(coeffs) - 2, dt)
             c0 = coeffs[0] / dt**2
@@ -623,13 +636,14 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             f_ext, Kf = loads(t1, x1, tangent)
             r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
             if coeffs is not None:  # M~ ((1 - af) a_fluid1 + af a_fluid0) in place of its M~ a
+                assert m.added_mass is not None
                 r += m.added_mass @ (
                     (1 - p.alpha_f) * (c0 * x1 + known)
                     + p.alpha_f * a_fluid0
                     - (1 - p.alpha_m) * a1
                     - p.alpha_m * s.a
                 )
-            elif as_force:  # the added mass weighted like the exchanged force (alpha_f)
+            elif as_force is not None:  # the added mass weighted like the exchanged force
                 r += m.added_mass @ ((p.alpha_m - p.alpha_f) * (a1 - s.a))
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
             C = None
@@ -640,7 +654,7 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
                 return r, None
             assert K is not None
             T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
-            if as_force:  # (a stencil's coeffs come only with as_force)
+            if as_force is not None:  # (a stencil's coeffs come only with as_force)
                 assert m.added_mass is not None
                 if coeffs is not None:
                     T = T + ((1 - p.alpha_f) * c0 - c_a) * m.added_mass

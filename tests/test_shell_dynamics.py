@@ -217,3 +217,23 @@ def test_a_kept_tangent_that_fails_gives_way_to_full_newton(make_case):
         )
         assert kept.solve is not broken  # replaced by a fresh factorization
         assert kept.solve is not broken  # replaced by the fresh factorization
+
+
+def test_the_shell_takes_the_preconditioning_added_mass_as_a_capability(make_case):
+    """The *-am schemes hand the structure its preconditioning added mass through the typed
+    TakesAddedMass capability: M~ joins the inertia and the integrator weights it like the
+    exchanged force, with the fluid's stencil; None takes both away."""
+    from fsi_orchestrator.participant import AddedMassPreconditioning, TakesAddedMass
+    from solid_adapter.solvers import AddedMassAsForce
+
+    solid = _strip_participant(make_case, 1e-3)
+    assert isinstance(solid, TakesAddedMass)
+    n = solid.model.n_nodes
+    stencil = (2.25, -6.0, 5.5, -2.0, 0.25)
+    solid.take_added_mass(AddedMassPreconditioning(added_mass_z=np.eye(n), stencil=stencil))
+    added = solid.model.inertia - solid.model.mass
+    assert added.sum() == pytest.approx(n)  # one unit on each node's z acceleration
+    assert solid.integrator.added_mass_as_force == AddedMassAsForce(stencil)
+    solid.take_added_mass(None)
+    assert solid.model.added_mass is None and solid.model.inertia is solid.model.mass
+    assert solid.integrator.added_mass_as_force is None

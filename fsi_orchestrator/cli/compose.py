@@ -12,7 +12,7 @@ import numpy as np
 
 from ..case import Case
 from ..case.schema import FluidDomain, FluidModel
-from ..participant import HasAccelerationStencil, Participant
+from ..participant import AddedMassPreconditioning, HasAccelerationStencil, Participant
 
 if TYPE_CHECKING:
     from ..coupling import Coupling
@@ -198,20 +198,23 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     if start_note is not None:
         solid = build_shell_participant(case, model)
     settings = coupling_settings(case)
-    model.set_added_mass(
-        settings.added_mass_scale * estimate.matrix if settings.uses_added_mass else None
-    )
-    model.added_mass_as_force = settings.uses_added_mass
     if fluid_factory is not None:
         fluid = fluid_factory(case, solid)
     else:
         true_added_mass = fast_added_mass(case, build_shell_model(case))
         assert true_added_mass is not None  # no fluid factory: the fast fluid, coupled
         fluid = PotentialParticipant(true_added_mass, solid.interface())
-    if settings.uses_added_mass:  # M~ weighted with the fluid's own discrete acceleration
-        model.added_mass_stencil = (
-            fluid.acceleration_stencil if isinstance(fluid, HasAccelerationStencil) else None
+    solid.take_added_mass(
+        AddedMassPreconditioning(
+            added_mass_z=settings.added_mass_scale * estimate.matrix,
+            # M~ weighted with the fluid's own discrete acceleration
+            stencil=(
+                fluid.acceleration_stencil if isinstance(fluid, HasAccelerationStencil) else None
+            ),
         )
+        if settings.uses_added_mass
+        else None
+    )
     start = None
     if case.coupling.start_correction and settings.lead_in_windows > 0:
         start = CorrectableStart(case, model, solid, estimate.matrix)
