@@ -34,6 +34,7 @@ SMALL = [
     "fluid.mesh_scale=1.5",
     "time.steps_per_period=20",
     "output.vtk=false",
+    "output.vortex_q_level=0.3",  # the tail's edge vortices from the second window on
 ]
 TAIL_X = 0.16676  # the original fish's trailing edge at mid-height (m, from the nose)
 CMD = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
@@ -77,6 +78,19 @@ def assert_flow_slices(out: Path, windows: list[int], tip: np.ndarray) -> None:
     tail_x = points[np.abs(points[:, 2] - tip[2]) < 1e-6, 0]
     assert abs(tip[2]) > 1e-3 and tail_x.size  # the displaced trailing edge, not the flat one
     assert np.any(np.abs(tail_x - (TAIL_X + tip[0])) < 1e-3)
+    # the fish's faces, moved: their swing reaches the tail's, with the pressure on them
+    body = pv.read(out / "vtk" / f"flow_body_{windows[-1]:06d}.vtp")
+    z = np.asarray(body.points)[:, 2]
+    assert np.abs(z).max() == pytest.approx(abs(tip[2]), rel=0.05)
+    assert np.isfinite(body.point_data["p"]).all() and np.ptp(body.point_data["p"]) > 0
+    # the vortices at the tail's edges (SMALL's Q level)
+    vortices = ET.parse(out / "vtk" / "flow_vortices.pvd").getroot()
+    assert [d.get("file") for d in vortices.iter("DataSet")] == [
+        f"flow_vortices_{w:06d}.vtp" for w in windows
+    ]
+    surface = pv.read(out / "vtk" / f"flow_vortices_{windows[-1]:06d}.vtp")
+    assert surface.n_points > 0 and "vorticity" in surface.point_data.keys()
+    assert np.asarray(surface.points)[:, 0].max() > 0.8 * TAIL_X  # shed at the tail
 
 
 def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
@@ -129,7 +143,8 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     post = [sys.executable, "-m", "fsi_orchestrator.cli.post", str(out)]
     done = subprocess.run(post, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert done.stdout.split() == [str(out / "run.png"), str(out / "flow.png")]
+    pictures = ["run.png", "flow.png", "fish3d.png", "period.gif"]
+    assert done.stdout.split() == [str(out / name) for name in pictures]
 
 
 def test_persistent_driver_runs_one_solve_per_window(world_searchable):

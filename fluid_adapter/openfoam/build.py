@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import warnings
 from dataclasses import asdict
@@ -19,10 +20,10 @@ from .drivers import PersistentDriver, RelaunchDriver
 from .fishmesh import FISH_PATCHES, TankGeometry, tank_geometry
 from .foamio import write_dict
 from .foamrun import FoamRun
-from .interface import read_interface
+from .interface import FluidInterface, read_interface
 from .motion import write_diffusivity
 from .participant import OpenFoamParticipant
-from .slices import fish_planes
+from .slices import Surface, fish_surfaces
 from .tankcase import flow_settings, generate_tank_case
 
 FINGERPRINT = "fishfsi-case.json"
@@ -114,10 +115,16 @@ def build_openfoam_participant(
     else:
         chosen = RelaunchDriver(run, dt, prelaunch=_prelaunch(case, processes))
     participant = OpenFoamParticipant(
-        run, chosen, dt=dt, n_windows=n_windows, flow_planes=fish_planes(interface.points0)
+        run, chosen, dt=dt, n_windows=n_windows, flow_surfaces=flow_surfaces(case, interface)
     )
     participant.mesh_quality = quality
     return participant
+
+
+def flow_surfaces(case: Case, interface: FluidInterface) -> tuple[Surface, ...]:
+    omega = 2 * math.pi * case.actuation.frequency_hz
+    q_level = case.output.vortex_q_level * omega**2
+    return fish_surfaces(interface.points0, FISH_PATCHES, q_level)
 
 
 def _prelaunch(case: Case, processes: int) -> bool:

@@ -24,7 +24,7 @@ from .drivers import PersistentDriver, RelaunchDriver
 from .errors import DriverError
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
-from .slices import Plane, sample_slices
+from .slices import Surface, sample_slices
 
 FACE_FORCE = "face_force"  # (m, 3) N
 FACE_CENTRES = "face_centres"  # (m, 3) m, moved mesh
@@ -42,10 +42,10 @@ class OpenFoamParticipant:
         *,
         dt: float,
         n_windows: int,
-        flow_planes: tuple[Plane, ...] = (),
+        flow_surfaces: tuple[Surface, ...] = (),
     ) -> None:
         self.run, self.driver = run, driver
-        self.flow_planes = flow_planes
+        self.flow_surfaces = flow_surfaces
         self.dt, self.n_windows = dt, n_windows
         n = len(run.interface.points0)
         self._displacement = np.zeros((n, 3))
@@ -118,12 +118,13 @@ class OpenFoamParticipant:
         return {"force_n": loads.force, "moment_nm": loads.moment, "thrust_n": loads.thrust}
 
     def flow_fields(self) -> dict[str, Path]:
-        """Flow slices (p, U, vorticity) at the last window's end, sampled from its time folder
-        (optional in the protocol): {series name: .vtp file}, to be moved away by the caller."""
-        if not self.flow_planes:
+        """Flow surfaces (p, U, vorticity) at the last window's end, sampled from its time
+        folder (optional in the protocol): {series name: .vtp file}, to be moved away by the
+        caller."""
+        if not self.flow_surfaces:
             return {}
         time_name = self.run.time_folder(self.time, self.dt)
-        found = sample_slices(self.run.path, time_name, self.flow_planes, self.run.processes)
+        found = sample_slices(self.run.path, time_name, self.flow_surfaces, self.run.processes)
         return {f"flow_{name}": path for name, path in found.items()}
 
     def store_checkpoint(self) -> None:

@@ -727,11 +727,22 @@ class Output:
     )
     flow_every: int = param(
         10,
-        "OpenFOAM: write flow slices (p, U, vorticity; vtk/flow_midheight.pvd, a horizontal "
-        "plane through the plate's centre height, and vtk/flow_wake.pvd, across the tank 20 mm "
-        "behind the tail) every n windows; 0: none.",
+        "OpenFOAM: write flow surfaces (p, U, vorticity) every n windows; 0: none. "
+        "vtk/flow_midheight.pvd, a horizontal plane through the plate's centre height; "
+        "vtk/flow_wake.pvd, across the tank 20 mm behind the tail; vtk/flow_body.pvd, the "
+        "fish's faces; vtk/flow_vortices.pvd, the Q-criterion iso-surface (output.vortex_q_level). "
+        "fsi-post draws them in 3D.",
         ge=0,
         le=1_000_000,
+    )
+    vortex_q_level: float = param(
+        3.0,
+        "OpenFOAM: the level of the wake's Q-criterion iso-surface (vtk/flow_vortices.pvd), in "
+        "units of the drive's (2 pi f)^2 (3 Hz: 1066 1/s^2); 0: none. Q > 0 where rotation "
+        "outweighs strain: vortex cores.",
+        unit="(2 pi f)^2",
+        ge=0,
+        le=1e6,
     )
 
 

@@ -5,7 +5,8 @@
   speed, swimming number and turning rate with the seed's measured points (``swimming.png``);
 - a run (``results.h5`` or its folder): tail-tip displacement, fluid force / thrust and coupling
   iterations versus time; with OpenFOAM's flow slices (``vtk/flow_midheight.pvd``) also the
-  last one's vorticity and pressure around the fish (``flow.png``).
+  last one's vorticity and pressure around the fish (``flow.png``), and with its flow surfaces
+  the fish and its wake in 3D (``fish3d.png``, ``period.gif``; :mod:`.pictures`).
 
 Writes PNG files next to the input (or to ``--output``) and prints their paths.
 """
@@ -26,6 +27,7 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from . import pictures  # noqa: E402
 from .common import EXIT_BAD_INPUT, EXIT_OK, add_version  # noqa: E402
 from .swimming import plot_swimming_sweep  # noqa: E402
 
@@ -191,6 +193,18 @@ def plot_flow(pvd: Path, output: Path) -> Path | None:
     return target
 
 
+def drive_period_s(results: Path) -> float | None:
+    """The drive's period from the resolved case results.h5 carries (None: not recorded)."""
+    import tomllib
+
+    with h5py.File(results, "r") as h5:
+        text = h5.attrs.get("case_toml")
+    if text is None:
+        return None
+    frequency = tomllib.loads(str(text)).get("actuation", {}).get("frequency_hz")
+    return 1.0 / float(frequency) if frequency else None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="fsi-post",
@@ -223,6 +237,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(plot_run(found, output))
         slices = found.parent / "vtk" / "flow_midheight.pvd"
         flow = plot_flow(slices, output) if slices.is_file() else None
+        if flow is not None:
+            print(flow)
+        for picture in pictures.draw(found.parent / "vtk", output, drive_period_s(found)):
+            print(picture)
     except (KeyError, ValueError, OSError) as err:  # not what fsi-run / fsi-sweep write
         print(
             f"error: {found}: not a table fsi-run or fsi-sweep wrote ({err!r}); "
@@ -230,8 +248,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_BAD_INPUT
-    if flow is not None:
-        print(flow)
     return EXIT_OK
 
 
