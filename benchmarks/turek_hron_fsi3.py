@@ -36,7 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from fluid_adapter.openfoam.turek_fsi import FSI3, build_fluid, generate_fsi_case  # noqa: E402
 from fsi_orchestrator.case.schema import CouplingScheme, TimeScheme  # noqa: E402
 from fsi_orchestrator.cli.turek_hron import FsiHistory, flag_participant, run_coupled  # noqa: E402
-from fsi_orchestrator.coupling import CouplingSettings  # noqa: E402
+from fsi_orchestrator.coupling_settings import CouplingSettings, scheme_settings  # noqa: E402
 
 
 def oscillation(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
@@ -150,10 +150,10 @@ def main(argv: list[str] | None = None) -> int:
     fluid = build_fluid(args.workdir / "fsi", settings, args.dt, n_windows)
     solid = flag_participant(FSI3, static=False, elements=(40, 4))
     coupling = CouplingSettings(
-        scheme=CouplingScheme(args.scheme),
-        relaxation=0.5,
+        scheme_settings=scheme_settings(
+            CouplingScheme(args.scheme), relaxation=0.5, max_iterations=30
+        ),
         tolerance_rel=args.tolerance,
-        max_iterations=30,
         predictor=args.predictor,
     )
 

@@ -30,14 +30,13 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from itertools import pairwise
 from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .acceleration import Acceleration, make_acceleration
+from .acceleration import Acceleration
 from .case.schema import CouplingScheme
 from .convergence import (
     ConvergenceCriteria,
@@ -45,6 +44,7 @@ from .convergence import (
     ScaledRelativeMeasure,
     WindowStatus,
 )
+from .coupling_settings import CouplingSettings as CouplingSettings  # re-exported
 from .mapping import InterfaceMapping
 from .participant import (
     ACCELERATION,
@@ -81,55 +81,6 @@ LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-i
 LEAD_IN_MAX_SPEED_M_S = 2.0
 
 
-@dataclass(frozen=True, kw_only=True)
-class CouplingSettings:
-    scheme: CouplingScheme
-    relaxation: float = 0.5
-    tolerance_rel: float = 1e-4
-    max_iterations: int = 50
-    predictor: str = "linear"
-    period_s: float = 0.0  # the driving period, for the periodic predictor
-    reuse_windows: int = 8
-    # A fluid with memory (CFD) starts at rest while the structure may start on its periodic
-    # orbit: before window 0 the fluid alone follows that orbit, ramped up from rest, for this
-    # many windows (see Coupling.lead_in).
-    lead_in_windows: int = 0
-    lead_in_omega: float = 0.0
-    # Share of the fast added mass moved to the structure's side (*-am schemes). Any value
-    # leaves the converged solution unchanged; the best one makes g = f + M' a insensitive to
-    # the window's displacement. For OpenFOAM (backward ddt, plate moved to u_k) the force
-    # responds with about 3 M~/dt^2 (measured), the structure's a_k with 1/(beta dt^2) =
-    # 3.6/dt^2: M' = M~ is within 20 % of the optimum (docs/coupling.md).
-    added_mass_scale: float = 1.0
-    # iqn-ils-am: windows before this one take one solve each, as explicit-am
-    explicit_windows: int = 0
-
-    @property
-    def implicit(self) -> bool:
-        return self.scheme.iterates
-
-    def iterates(self, window: int) -> bool:
-        """Whether ``window`` is iterated to convergence."""
-        return self.implicit and window >= self.explicit_windows
-
-    @property
-    def uses_added_mass(self) -> bool:
-        return self.scheme.uses_added_mass
-
-
-def _make_accelerator(settings: CouplingSettings) -> Acceleration | None:
-    name = settings.scheme.accelerator
-    if name == "constant":
-        return make_acceleration(name, relaxation=settings.relaxation)
-    if name == "iqn-ils":
-        return make_acceleration(
-            name, initial_relaxation=settings.relaxation, reuse_windows=settings.reuse_windows
-        )
-    if name is not None:  # aitken, iqn-imvj
-        return make_acceleration(name, initial_relaxation=settings.relaxation)
-    return None
-
-
 class Coupling:
     """Couples a fluid participant to the structure over one window at a time."""
 
@@ -146,20 +97,19 @@ class Coupling:
         self.start_fit: ModalFit | None = None
         fluid_points = fluid.interface().points
         self.mapping = InterfaceMapping.from_points(solid_points[:, :2], fluid_points[:, :2])
+        scale = settings.added_mass_scale
         self.added_mass_z = (
-            settings.added_mass_scale * added_mass_z
-            if settings.uses_added_mass and added_mass_z is not None
-            else None
+            scale * added_mass_z if scale is not None and added_mass_z is not None else None
         )
         self.n_solid = len(solid_points)
-        self.accelerator = _make_accelerator(settings)
+        self.accelerator: Acceleration | None = settings.scheme_settings.make_accelerator()
         if self.accelerator is not None:
             self.accelerator.initialize({FIELD: np.zeros((self.n_solid, 3))})
         self.predictor = Predictor(settings.predictor, period=settings.period_s)
         self.measure = ScaledRelativeMeasure(tolerance=settings.tolerance_rel)
         self.criteria = ConvergenceCriteria(
             {FIELD: [self.measure]},
-            max_iterations=settings.max_iterations if settings.implicit else 1,
+            max_iterations=settings.max_iterations,
         )
         self.norms: list[float] = []
         # the tolerance refers to the fluid force's size over the last windows: its norm passes

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fsi_orchestrator.case.schema import CouplingScheme
 from fsi_orchestrator.convergence import CouplingDivergenceError
 from fsi_orchestrator.coupling import Coupling, CouplingSettings
+from fsi_orchestrator.coupling_settings import IQNILSScheme
 from fsi_orchestrator.participant import (
     ACCELERATION,
     DISPLACEMENT,
@@ -86,7 +86,9 @@ class FlakyFluid(Spring):
 def window(fail_on: set[int], error=RuntimeError):
     k, c, load = 1.0, 3.0, 1.0  # gain c/k = 3: plain iteration diverges, IQN-ILS converges
     solid, fluid = Spring(k, load), FlakyFluid(c, fail_on, error)
-    settings = CouplingSettings(scheme=CouplingScheme.IQN_ILS, relaxation=0.1, tolerance_rel=1e-8)
+    settings = CouplingSettings(
+        scheme_settings=IQNILSScheme(initial_relaxation=0.1), tolerance_rel=1e-8
+    )
     coupling = Coupling(fluid, POINTS, settings)
     stats = coupling.solve_window(solid, 0.1, 1)
     return stats, solid, load * -c / (k + c)  # fixed point x = -c (x + load) / k

@@ -64,24 +64,25 @@ def added_mass_for_preconditioning(case: Case, shell_model):
 
 
 def coupling_settings(case: Case):
+    """The case's [coupling] keys on the typed settings of its scheme."""
     from ..case.timing import windows_per_period
-    from ..coupling import CouplingSettings
+    from ..coupling_settings import CouplingSettings, scheme_settings
 
     c = case.coupling
-    relaxation = c.relaxation
-    if relaxation is None:  # *-am: the preconditioned map is contractive
-        relaxation = 1.0 if c.scheme.uses_added_mass else 0.5
-    return CouplingSettings(
-        **lead_in(case),
-        scheme=c.scheme,
-        relaxation=relaxation,
-        tolerance_rel=c.tolerance_rel,
+    scheme = scheme_settings(
+        c.scheme,
+        relaxation=c.relaxation,
         max_iterations=c.max_iterations,
-        predictor=c.predictor.value,
-        period_s=1 / case.actuation.frequency_hz,
         reuse_windows=c.reuse_windows,
         added_mass_scale=c.added_mass_scale,
         explicit_windows=c.explicit_periods * windows_per_period(case),
+    )
+    return CouplingSettings(
+        **lead_in(case),
+        scheme_settings=scheme,
+        tolerance_rel=c.tolerance_rel,
+        predictor=c.predictor.value,
+        period_s=1 / case.actuation.frequency_hz,
     )
 
 
@@ -198,6 +199,7 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     if start_note is not None:
         solid = build_shell_participant(case, model)
     settings = coupling_settings(case)
+    scale = settings.added_mass_scale  # None: a plain scheme
     if fluid_factory is not None:
         fluid = fluid_factory(case, solid)
     else:
@@ -206,13 +208,13 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
         fluid = PotentialParticipant(true_added_mass, solid.interface())
     solid.take_added_mass(
         AddedMassPreconditioning(
-            added_mass_z=settings.added_mass_scale * estimate.matrix,
+            added_mass_z=scale * estimate.matrix,
             # M~ weighted with the fluid's own discrete acceleration
             stencil=(
                 fluid.acceleration_stencil if isinstance(fluid, HasAccelerationStencil) else None
             ),
         )
-        if settings.uses_added_mass
+        if scale is not None
         else None
     )
     start = None

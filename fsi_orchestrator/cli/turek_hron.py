@@ -29,8 +29,8 @@ from fluid_adapter.openfoam.turek_fsi import (
 )
 from solid_adapter.plane_strain import FlagParticipant, build_flag_participant
 
-from ..case.schema import CouplingScheme
 from ..coupling import Coupling, CouplingSettings
+from ..coupling_settings import IQNILSScheme
 
 
 @dataclass
@@ -140,7 +140,7 @@ def run_fsi1(
     fluid = build_fluid(workdir / "fsi", settings, dt, max_windows)
     solid = flag_participant(FSI1, static=True, elements=elements)
     coupling = CouplingSettings(
-        scheme=CouplingScheme.IQN_ILS, relaxation=0.5, tolerance_rel=1e-4, max_iterations=20
+        scheme_settings=IQNILSScheme(initial_relaxation=0.5, max_iterations=20), tolerance_rel=1e-4
     )
     return run_coupled(
         fluid,
