@@ -109,4 +109,16 @@ def test_the_q_level_is_in_units_of_the_drives_omega_squared():
 
     case = load_case(Path(__file__).resolve().parents[1] / "cases" / "fixed_head_3Hz")
     (*_, vortices) = flow_surfaces(case, Interface())  # type: ignore[arg-type]
-    assert vortices.value == pytest.approx(3.0 * (2 * math.pi * 3.0) ** 2)  # 1066 1/s^2
+    assert vortices.value == pytest.approx(0.1 * (2 * math.pi * 3.0) ** 2)  # 35.5 1/s^2
+
+
+def test_the_les_wake_case_is_the_seeds_scene_with_twenty_frames_a_period():
+    """Sec. 3.5.3: the original fish, head clamped, 10 Hz, Smagorinsky LES in the tank."""
+    from fsi_orchestrator.case import load_case
+    from fsi_orchestrator.case.schema import HeadCondition, Turbulence
+
+    case = load_case(Path(__file__).resolve().parents[1] / "cases" / "les_wake_10Hz")
+    assert case.geometry.preset == "original" and case.boundary.head is HeadCondition.CLAMPED
+    assert case.actuation.frequency_hz == 10.0
+    assert case.fluid.turbulence is Turbulence.SMAGORINSKY
+    assert case.time.steps_per_period / case.output.flow_every == 20

@@ -736,10 +736,10 @@ class Output:
         le=1_000_000,
     )
     vortex_q_level: float = param(
-        3.0,
+        0.1,
         "OpenFOAM: the level of the wake's Q-criterion iso-surface (vtk/flow_vortices.pvd), in "
-        "units of the drive's (2 pi f)^2 (3 Hz: 1066 1/s^2); 0: none. Q > 0 where rotation "
-        "outweighs strain: vortex cores.",
+        "units of the drive's (2 pi f)^2 (0.1 at 10 Hz: 395 1/s^2, where the coarse LES wake "
+        "peaks at 2440); 0: none. Q > 0 where rotation outweighs strain: vortex cores.",
         unit="(2 pi f)^2",
         ge=0,
         le=1e6,
