@@ -95,7 +95,7 @@ def test_a_square_wave_start_holds_the_harmonics_the_time_step_resolves():
     position with its velocity. A single harmonic through (u0, v0), the former lead-in, swings
     more than twice as far as the orbit does."""
     from fsi_orchestrator.case.loader import load_case
-    from fsi_orchestrator.coupling import _periodic_motion
+    from fsi_orchestrator.lead_in import periodic_motion
     from fsi_orchestrator.participant import DISPLACEMENT, VELOCITY
     from solid_adapter.build import build_shell_participant, resolved_harmonics
 
@@ -108,7 +108,7 @@ def test_a_square_wave_start_holds_the_harmonics_the_time_step_resolves():
     solid = build_shell_participant(case)
     assert [k for k, _ in solid.orbit.harmonics] == [1, 3, 5]
     omega = 2 * np.pi * case.actuation.frequency_hz
-    motion, state = _periodic_motion(solid, omega), solid.write_data()
+    motion, state = periodic_motion(solid, omega), solid.write_data()
     period = np.linspace(0, 2 * np.pi / omega, 200)
     on_orbit = max(np.abs(motion(t)[:, 2]).max() for t in period)  # the tail's amplitude
     # normal motion (the in-plane translations differ by ~1e-9 m: the start puts the in-plane
@@ -133,7 +133,7 @@ def test_the_lead_in_blends_from_the_orbit_it_started_on():
     corrected one: a motion taken before the restart must keep the old orbit (a bound method
     reading the current orbit made the blend jump to the new one at once)."""
     from fsi_orchestrator.case.loader import load_case
-    from fsi_orchestrator.coupling import _periodic_motion
+    from fsi_orchestrator.lead_in import periodic_motion
     from solid_adapter.build import build_shell_participant
     from solid_adapter.harmonic import PeriodicResponse
     from solid_adapter.shell import NDOF
@@ -141,7 +141,7 @@ def test_the_lead_in_blends_from_the_orbit_it_started_on():
     case = load_case(ROOT / "cases" / "fixed_head_3Hz", ["fluid.model=potential"])
     solid = build_shell_participant(case)
     omega = 2 * np.pi * case.actuation.frequency_hz
-    old = _periodic_motion(solid, omega)
+    old = periodic_motion(solid, omega)
     before = old(0.01).copy()
     orbit = solid.orbit
     doubled = PeriodicResponse(
@@ -149,7 +149,7 @@ def test_the_lead_in_blends_from_the_orbit_it_started_on():
     )
     solid.restart(doubled)
     np.testing.assert_array_equal(old(0.01), before)
-    new = _periodic_motion(solid, omega)
+    new = periodic_motion(solid, omega)
     swing = new(0.01)[:, 2] - orbit.x_static[2::NDOF]
     np.testing.assert_allclose(swing, 2 * (before[:, 2] - orbit.x_static[2::NDOF]), atol=1e-15)
 
@@ -162,7 +162,8 @@ def test_the_fitting_lead_in_period_moves_no_faster_than_the_cfd_resolves():
     from fluid_adapter.potential.participant import PotentialParticipant
     from fsi_orchestrator.case.loader import load_case
     from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, coupled_setup
-    from fsi_orchestrator.coupling import LEAD_IN_MAX_SPEED_M_S, Coupling, _periodic_motion
+    from fsi_orchestrator.coupling import Coupling
+    from fsi_orchestrator.lead_in import LEAD_IN_MAX_SPEED_M_S, periodic_motion
     from fsi_orchestrator.participant import DISPLACEMENT
     from solid_adapter.build import CorrectableStart
 
@@ -195,7 +196,7 @@ def test_the_fitting_lead_in_period_moves_no_faster_than_the_cfd_resolves():
         coupling.fluid, solid.interface().points, settings, estimate, start_orbit=start
     )
     dt = 1.0 / (frequency * n)
-    orbit = _periodic_motion(solid, 2 * np.pi * frequency)
+    orbit = periodic_motion(solid, 2 * np.pi * frequency)
     orbit_speed = max(np.abs(orbit(k * dt) - orbit((k - 1) * dt)).max() / dt for k in range(-n, 1))
     coupling.lead_in(solid, dt)
     first = np.array(moved[:n])

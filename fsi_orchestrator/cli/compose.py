@@ -146,12 +146,12 @@ def ramped_start(case: Case) -> Case:
 def choose_start(case: Case, solid) -> tuple[Case, str | None]:
     """The periodic start leads the CFD onto the fast model's orbit (Coupling.lead_in). That
     orbit has no fluid damping: near a wet resonance (20-28 Hz for the clamped fish) it moves
-    the plate faster than the lead-in lets the CFD follow (coupling.LEAD_IN_MAX_SPEED_M_S),
+    the plate faster than the lead-in lets the CFD follow (lead_in.LEAD_IN_MAX_SPEED_M_S),
     and at 25 Hz the orbit corrected from the capped lead-in started the plate where its
     first coupled window never converged (docs/coupling.md). Such a run starts from rest with
     a voltage ramp instead. Returns (the case as run, why it changed or None)."""
     from ..case.timing import windows_per_period
-    from ..coupling import LEAD_IN_MAX_SPEED_M_S, peak_speed
+    from ..lead_in import LEAD_IN_MAX_SPEED_M_S, peak_speed
 
     motion = solid.orbit_motion() if lead_in(case) else None
     if motion is None:
