@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -167,70 +167,128 @@ def newton(
     shrinks less than KEPT_TANGENT_RATE-fold (or is not finite) is replaced by a fresh one at
     the current iterate (or at the one before, if the increment grew).
     """
-    scale = dof_scale(model)
-    free = model.free_dofs if free is None else free
-    x, x_before, first, previous, size = x0.copy(), x0.copy(), None, math.inf, math.inf
-    solve = kept.solve if (kept is not None and warm) else None
-    r: NDArray | None = None
-    K, update = None, []
-    it = 0
-    while it < settings.max_iterations:
-        it += 1
-        if solve is None:  # full Newton: a fresh tangent at x (the line search's, if it made one)
-            if K is None or r is None:
-                r, K, *update = residual(x, True)
-            if not np.all(np.isfinite(r)):
-                raise SolverError(f"shell: NaN in the residual {where} (Newton iteration {it})")
-            solve = factorized(K, free, update[0] if update else None)
-            if kept is not None:
-                kept.solve = solve
-            fresh = True
-        else:
-            r = residual(x, False)[0] if r is None else r
-            fresh = False
-        dx = solve(-r) if np.all(np.isfinite(r)) else np.full_like(r, np.nan)
-        if not np.all(np.isfinite(dx)) and fresh:
-            raise SolverError(
-                f"shell: singular tangent {where} (Newton iteration {it}); is the "
-                "plate clamped (boundary.head)?"
-            )
-        full = float(np.max(np.abs(dx * scale))) if np.all(np.isfinite(dx)) else math.inf
-        if not fresh and (not math.isfinite(full) or full > KEPT_TANGENT_RATE * previous):
-            if full >= previous:  # the kept tangent's last step made things worse: undo it
-                x = x_before.copy()
-            solve, r, K = None, None, None
-            continue
-        limit = settings.tolerance * max(full if first is None else first, reference, 1e-300)
-        if full <= limit or full < ROUND_OFF_INCREMENT:
-            # converged on the full step, which the line search takes once the increments are
-            # this small: the residual and tangent at x + dx would go unused (about a quarter
-            # of a coupled re-solve's assembly)
-            return x + dx, it
-        x_before = x.copy()
-        if not fresh:
-            x, r, first, previous = x + dx, None, full if first is None else first, full
-            continue
-        keep = kept is not None and first is not None and full <= KEEP_AFTER * first
-        step, r, K, update = _line_search(residual, x, dx, r, tangent=not keep)
-        x += step * dx
-        size = step * full
-        first = size if first is None else first
-        if size <= settings.tolerance * max(first, reference, 1e-300) or size < ROUND_OFF_INCREMENT:
-            return x, it
-        previous = full
-        if not keep or step != 1.0:
-            solve = None
-            if K is None:  # a kept tangent was planned, but the line search cut the step
-                r = None
-    raise SolverError(
-        f"shell: Newton did not converge {where} in {settings.max_iterations} "
-        f"iterations (last scaled increment {min(size, previous):.2e}); "
-        + (
-            "reduce the load step (more analysis.load_steps)"
-            if where.startswith("in load step")
-            else "reduce the time step (more time.steps_per_period, or a smaller time.step_s)"
-        )
+    iteration = _NewtonIteration(
+        residual, model, settings, where, reference, model.free_dofs if free is None else free, kept
     )
+    return iteration.run(x0, kept.solve if (kept is not None and warm) else None)
+
+
+@dataclass
+class _NewtonIteration:
+    """One Newton solve (see :func:`newton`): the iterate, the tangent it solves with (fresh:
+    factored at this iterate; else a kept one) and the increments so far."""
+
+    residual: ResidualFn
+    model: ShellModel
+    settings: NewtonSettings
+    where: str
+    reference: float
+    free: NDArray
+    kept: KeptTangent | None = None
+    x: NDArray = field(default_factory=lambda: np.zeros(0))
+    x_before: NDArray = field(default_factory=lambda: np.zeros(0))
+    solve: Callable[[NDArray], NDArray] | None = None
+    r: NDArray | None = None
+    K: sp.spmatrix | None = None
+    update: list = field(default_factory=list)
+    first: float | None = None  # the solve's first (scaled) increment
+    previous: float = math.inf  # the last full increment
+    size: float = math.inf  # the last step taken
+
+    def run(self, x0: NDArray, solve: Callable[[NDArray], NDArray] | None) -> tuple[NDArray, int]:
+        """From x0, with the tangent ``solve`` if one is kept: (x, iterations)."""
+        scale = dof_scale(self.model)
+        self.x, self.x_before, self.solve = x0.copy(), x0.copy(), solve
+        it = 0
+        while it < self.settings.max_iterations:
+            it += 1
+            fresh = self._tangent(it)
+            r = self.r
+            assert r is not None and self.solve is not None
+            dx = self.solve(-r) if np.all(np.isfinite(r)) else np.full_like(r, np.nan)
+            if not np.all(np.isfinite(dx)) and fresh:
+                raise SolverError(
+                    f"shell: singular tangent {self.where} (Newton iteration {it}); is the "
+                    "plate clamped (boundary.head)?"
+                )
+            full = float(np.max(np.abs(dx * scale))) if np.all(np.isfinite(dx)) else math.inf
+            if not fresh and (not math.isfinite(full) or full > KEPT_TANGENT_RATE * self.previous):
+                self._drop_kept_tangent(full)
+                continue
+            if self._converged(full, full if self.first is None else self.first):
+                # converged on the full step, which the line search takes once the increments
+                # are this small: the residual and tangent at x + dx would go unused (about a
+                # quarter of a coupled re-solve's assembly)
+                return self.x + dx, it
+            self.x_before = self.x.copy()
+            if not fresh:
+                self._kept_step(dx, full)
+            elif self._full_step(dx, full):
+                return self.x, it
+        raise self._not_converged()
+
+    def _converged(self, increment: float, first: float) -> bool:
+        limit = self.settings.tolerance * max(first, self.reference, 1e-300)
+        return increment <= limit or increment < ROUND_OFF_INCREMENT
+
+    def _tangent(self, it: int) -> bool:
+        """The residual at x and a tangent to solve with: a fresh one at x (the line search's,
+        if it made one) unless a kept one goes on. Returns whether it is fresh."""
+        if self.solve is not None:
+            self.r = self.residual(self.x, False)[0] if self.r is None else self.r
+            return False
+        if self.K is None or self.r is None:
+            self.r, self.K, *self.update = self.residual(self.x, True)
+        if not np.all(np.isfinite(self.r)):
+            raise SolverError(f"shell: NaN in the residual {self.where} (Newton iteration {it})")
+        self.solve = factorized(self.K, self.free, self.update[0] if self.update else None)
+        if self.kept is not None:
+            self.kept.solve = self.solve
+        return True
+
+    def _drop_kept_tangent(self, full: float) -> None:
+        """The kept tangent contracts too slowly: factor afresh, at the iterate before if its
+        last step made things worse."""
+        if full >= self.previous:
+            self.x = self.x_before.copy()
+        self.solve, self.r, self.K = None, None, None
+
+    def _kept_step(self, dx: NDArray, full: float) -> None:
+        """A modified-Newton step: the full increment, the tangent kept."""
+        self.x, self.r = self.x + dx, None
+        self.first = full if self.first is None else self.first
+        self.previous = full
+
+    def _full_step(self, dx: NDArray, full: float) -> bool:
+        """A line-searched step with the fresh tangent; returns whether it converged. Once an
+        increment is KEEP_AFTER of the first, a kept tangent goes on with this one."""
+        keep = self.kept is not None and self.first is not None and full <= KEEP_AFTER * self.first
+        assert self.r is not None
+        step, self.r, self.K, self.update = _line_search(
+            self.residual, self.x, dx, self.r, tangent=not keep
+        )
+        self.x += step * dx
+        self.size = step * full
+        self.first = self.size if self.first is None else self.first
+        if self._converged(self.size, self.first):
+            return True
+        self.previous = full
+        if not keep or step != 1.0:
+            self.solve = None
+            if self.K is None:  # a kept tangent was planned, but the line search cut the step
+                self.r = None
+        return False
+
+    def _not_converged(self) -> SolverError:
+        return SolverError(
+            f"shell: Newton did not converge {self.where} in {self.settings.max_iterations} "
+            f"iterations (last scaled increment {min(self.size, self.previous):.2e}); "
+            + (
+                "reduce the load step (more analysis.load_steps)"
+                if self.where.startswith("in load step")
+                else "reduce the time step (more time.steps_per_period, or a smaller time.step_s)"
+            )
+        )
 
 
 def _line_search(
@@ -602,68 +660,10 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         guess: NDArray | None,
         stencil: bool = True,
     ) -> DynamicState:
-        p, m = self.p, self.model
-        t1 = s.t + dt
+        m, t1 = self.model, s.t + dt
         V1 = volts(t1)
-        internal = MixedNewtonInternal(m)
-        c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
-        c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
-        # Partitioned added-mass schemes: the coupling passes g = f + M~ a_k and the structure
-        # carries M~ in its inertia. Inertia is weighted at alpha_m, the force at alpha_f, so
-        # the two M~ terms would leave (alpha_f - alpha_m) M~ (a_k - a_k-1) behind - with M~ ~50
-        # plate masses a spurious term that made converged coupled runs oscillate and grow.
-        # Weighting M~ at alpha_f too makes the converged windows exactly M_s a + K u = f.
-        as_force = self.added_mass_as_force if m.added_mass is not None else None
-        # ... and weighting it with the acceleration the fluid computes from the same
-        # displacements (a_fluid = c0 x1 + known) keeps g = f + M~ a_fluid free of the
-        # difference between the two discrete accelerations, which explicit-am fed back
-        # window to window (a period-3 instability, docs/coupling.md)
-        coeffs = as_force.stencil if as_force is not None and stencil else None
-        if coeffs is not None:
-            past = _padded_past(s, len(coeffs) - 2, dt)
-            c0 = coeffs[0] / dt**2
-            known = sum(c * xk for c, xk in zip(coeffs[1:], (s.x, *past), strict=True)) / dt**2
-            a_fluid0 = s.added_mass_acceleration
-
-        def kinematics(x1: NDArray) -> tuple[NDArray, NDArray]:
-            a1 = (x1 - s.x - dt * s.v) / (p.beta * dt * dt) - (1 - 2 * p.beta) / (2 * p.beta) * s.a
-            v1 = s.v + dt * ((1 - p.gamma) * s.a + p.gamma * a1)
-            return v1, a1
-
-        def residual(x1: NDArray, tangent: bool):
-            v1, a1 = kinematics(x1)
-            f_int, K = internal(x1, V1, tangent)
-            f_ext, Kf = loads(t1, x1, tangent)
-            r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
-            if coeffs is not None:  # M~ ((1 - af) a_fluid1 + af a_fluid0) in place of its M~ a
-                assert m.added_mass is not None
-                r += m.added_mass @ (
-                    (1 - p.alpha_f) * (c0 * x1 + known)
-                    + p.alpha_f * a_fluid0
-                    - (1 - p.alpha_m) * a1
-                    - p.alpha_m * s.a
-                )
-            elif as_force is not None:  # the added mass weighted like the exchanged force
-                r += m.added_mass @ ((p.alpha_m - p.alpha_f) * (a1 - s.a))
-            r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
-            C = None
-            if self.damping is not None:
-                f_d, C = self.damping.force(m, x1, v1)
-                r += (1 - p.alpha_f) * f_d + p.alpha_f * s.f_damp
-            if not tangent:
-                return r, None
-            assert K is not None
-            T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
-            if as_force is not None:  # (a stencil's coeffs come only with as_force)
-                assert m.added_mass is not None
-                if coeffs is not None:
-                    T = T + ((1 - p.alpha_f) * c0 - c_a) * m.added_mass
-                else:
-                    T = T + (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * m.added_mass
-            if C is not None:
-                T = T + c_v * C
-            return r, T
-
+        added = self._added_mass_term(s, dt, stencil)
+        residual = self._residual(s, dt, loads, V1, added)
         # start: the caller's guess, else x (a constant-acceleration start x + dt v + dt^2/2 a
         # took 6-7 Newton iterations instead of 4-5 on the coupled fish: the fast DOFs' a is
         # not smooth)
@@ -682,13 +682,134 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
             warm=guess is not None,
         )
         self.newton_iterations += its
-        v1, a1 = kinematics(x1)
+        v1, a1 = self._kinematics(s, dt, x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
         state = DynamicState(t1, x1, v1, a1, f_int, f_ext, self._damping_force(x1, v1))
-        if coeffs is None:
-            return replace(state, past=s.past)
-        return replace(state, past=(s.x, *past)[: len(past)], a_fluid=c0 * x1 + known)
+        return replace(state, past=s.past) if added is None else added.carried(state, s)
+
+    def _kinematics(self, s: DynamicState, dt: float, x1: NDArray) -> tuple[NDArray, NDArray]:
+        """Newmark's (v1, a1) at x1."""
+        p = self.p
+        a1 = (x1 - s.x - dt * s.v) / (p.beta * dt * dt) - (1 - 2 * p.beta) / (2 * p.beta) * s.a
+        v1 = s.v + dt * ((1 - p.gamma) * s.a + p.gamma * a1)
+        return v1, a1
+
+    def _added_mass_term(
+        self, s: DynamicState, dt: float, stencil: bool
+    ) -> _AddedMassAtAlphaF | _AddedMassOnStencil | None:
+        """How the model's added mass enters beyond its inertia (None: it does not).
+        Partitioned added-mass schemes: the coupling passes g = f + M~ a_k and the structure
+        carries M~ in its inertia. Inertia is weighted at alpha_m, the force at alpha_f, so the
+        two M~ terms would leave (alpha_f - alpha_m) M~ (a_k - a_k-1) behind - with M~ ~50
+        plate masses a spurious term that made converged coupled runs oscillate and grow.
+        Weighting M~ at alpha_f too makes the converged windows exactly M_s a + K u = f. ...
+        and weighting it with the acceleration the fluid computes from the same displacements
+        (a_fluid = c0 x1 + known; the step's own ``stencil``, not a sub-step's) keeps
+        g = f + M~ a_fluid free of the difference between the two discrete accelerations,
+        which explicit-am fed back window to window (a period-3 instability,
+        docs/coupling.md)."""
+        as_force, added = self.added_mass_as_force, self.model.added_mass
+        if as_force is None or added is None:
+            return None
+        if as_force.stencil is None or not stencil:
+            return _AddedMassAtAlphaF(added, self.p, s.a)
+        coeffs = as_force.stencil
+        past = _padded_past(s, len(coeffs) - 2, dt)
+        known = sum(c * xk for c, xk in zip(coeffs[1:], (s.x, *past), strict=True)) / dt**2
+        return _AddedMassOnStencil(
+            added, self.p, s.a, coeffs[0] / dt**2, known, s.added_mass_acceleration, past
+        )
+
+    def _residual(
+        self,
+        s: DynamicState,
+        dt: float,
+        loads: LoadFn,
+        V1: NDArray,
+        added: _AddedMassAtAlphaF | _AddedMassOnStencil | None,
+    ) -> ResidualFn:
+        """The generalized-alpha balance at x1 and its tangent."""
+        p, m, t1 = self.p, self.model, s.t + dt
+        internal = MixedNewtonInternal(m)
+        c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
+        c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
+
+        def residual(x1: NDArray, tangent: bool):
+            v1, a1 = self._kinematics(s, dt, x1)
+            f_int, K = internal(x1, V1, tangent)
+            f_ext, Kf = loads(t1, x1, tangent)
+            r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
+            if added is not None:
+                r += added.force(x1, a1)
+            r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
+            C = None
+            if self.damping is not None:
+                f_d, C = self.damping.force(m, x1, v1)
+                r += (1 - p.alpha_f) * f_d + p.alpha_f * s.f_damp
+            if not tangent:
+                return r, None
+            assert K is not None
+            T = c_a * m.inertia + (1 - p.alpha_f) * (K - Kf if Kf is not None else K)
+            if added is not None:
+                T = T + added.tangent(c_a, dt)
+            if C is not None:
+                T = T + c_v * C
+            return r, T
+
+        return residual
+
+
+@dataclass(frozen=True)
+class _AddedMassAtAlphaF:
+    """M~ of an exchanged force g = f + M~ a weighted at alpha_f like that force, with the
+    integrator's own a: M~ (alpha_m - alpha_f) (a1 - a0) beside its inertia term."""
+
+    matrix: sp.spmatrix
+    p: AlphaParameters
+    a0: NDArray
+
+    def force(self, x1: NDArray, a1: NDArray) -> NDArray:
+        return self.matrix @ ((self.p.alpha_m - self.p.alpha_f) * (a1 - self.a0))
+
+    def tangent(self, c_a: float, dt: float) -> sp.spmatrix:
+        p = self.p
+        return (p.alpha_m - p.alpha_f) / (p.beta * dt * dt) * self.matrix
+
+    def carried(self, state: DynamicState, s: DynamicState) -> DynamicState:
+        return replace(state, past=s.past)
+
+
+@dataclass(frozen=True)
+class _AddedMassOnStencil:
+    """M~ ((1 - af) a_fluid1 + af a_fluid0) in place of its M~ a, a_fluid1 = c0 x1 + known the
+    fluid's differentiation of the displacements (AddedMassAsForce.stencil); the state carries
+    the displacements and a_fluid1 on."""
+
+    matrix: sp.spmatrix
+    p: AlphaParameters
+    a0: NDArray
+    c0: float
+    known: NDArray | float  # the stencil's terms of the displacements before x1
+    a_fluid0: NDArray
+    past: tuple[NDArray, ...]
+
+    def force(self, x1: NDArray, a1: NDArray) -> NDArray:
+        p = self.p
+        return self.matrix @ (
+            (1 - p.alpha_f) * (self.c0 * x1 + self.known)
+            + p.alpha_f * self.a_fluid0
+            - (1 - p.alpha_m) * a1
+            - p.alpha_m * self.a0
+        )
+
+    def tangent(self, c_a: float, dt: float) -> sp.spmatrix:
+        return ((1 - self.p.alpha_f) * self.c0 - c_a) * self.matrix
+
+    def carried(self, state: DynamicState, s: DynamicState) -> DynamicState:
+        past = self.past
+        a_fluid = self.c0 * state.x + self.known
+        return replace(state, past=(s.x, *past)[: len(past)], a_fluid=a_fluid)
 
 
 def _padded_past(s: DynamicState, n: int, dt: float) -> tuple[NDArray, ...]:
