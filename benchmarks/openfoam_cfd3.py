@@ -21,7 +21,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fluid_adapter.openfoam.turek_cfd3 import (  # noqa: E402
+from fsi_orchestrator.case.schema import Turbulence  # noqa: E402
+from turek_hron.cfd3 import (  # noqa: E402
     DRAG_AMPLITUDE_REF,
     DRAG_MEAN_REF,
     FREQUENCY_REF_HZ,
@@ -30,7 +31,6 @@ from fluid_adapter.openfoam.turek_cfd3 import (  # noqa: E402
     run_cfd3,
     run_cfd3_from,
 )
-from fsi_orchestrator.case.schema import Turbulence  # noqa: E402
 
 REFERENCE = {
     "drag_mean_n_m": DRAG_MEAN_REF,

@@ -1,4 +1,4 @@
-"""Plane-strain flag (solid_adapter.plane_strain) on the Turek & Hron (2006) CSM tests.
+"""Plane-strain flag (turek_hron.plane_strain) on the Turek & Hron (2006) CSM tests.
 
 (a) CSM1 (static, g = 2 m/s^2): tip error against Turek & Hron's table, per mesh and clamp shape
     (the cylinder's arc or the straight line x = 0.24899), with wall time.
@@ -23,7 +23,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from solid_adapter.plane_strain import (  # noqa: E402
+from turek_hron.plane_strain import (  # noqa: E402
     FlagGeometry,
     build_flag_participant,
     solve_csm,

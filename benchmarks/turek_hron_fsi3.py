@@ -33,10 +33,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fluid_adapter.openfoam.turek_fsi import FSI3, build_fluid, generate_fsi_case  # noqa: E402
 from fsi_orchestrator.case.schema import CouplingScheme, TimeScheme  # noqa: E402
-from fsi_orchestrator.cli.turek_hron import FsiHistory, flag_participant, run_coupled  # noqa: E402
 from fsi_orchestrator.coupling_settings import CouplingSettings, scheme_settings  # noqa: E402
+from turek_hron.fsi import FSI3, build_fluid, generate_fsi_case  # noqa: E402
+from turek_hron.run import FsiHistory, flag_participant, run_coupled  # noqa: E402
 
 
 def oscillation(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:

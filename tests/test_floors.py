@@ -8,7 +8,9 @@
   ``run``) composes the adapters;
 - no adapter imports the other: what both need about the plate (its planform) is the core's
   ``fsi_orchestrator.case.planform``, and what needs both (the shell's first mode as the fluid's
-  prescribed motion) is the application layer's (``fsi_orchestrator.cli.prescribed``).
+  prescribed motion) is the application layer's (``fsi_orchestrator.cli.prescribed``);
+- the benchmark geometries (``turek_hron``: the Turek & Hron channel, the plane-strain flag)
+  stand beside the product: they may import it, no product module imports them.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 ADAPTERS = ("solid_adapter", "fluid_adapter")
 CORE = ("fsi_orchestrator.case", "fsi_orchestrator.participant")
 APP = ("fsi_orchestrator.cli", "fsi_orchestrator.design", "fsi_orchestrator.api")
+PRODUCT = ("fsi_orchestrator", *ADAPTERS)
+BENCHMARKS = ("turek_hron",)
 
 
 def module_name(path: Path) -> str:
@@ -45,13 +49,13 @@ def imports(path: Path) -> set[str]:
 
 def edges() -> set[tuple[str, str]]:
     found = set()
-    for top in ("fsi_orchestrator", *ADAPTERS):
+    for top in PRODUCT:
         for path in (ROOT / top).rglob("*.py"):
             source = module_name(path)
             found.update(
                 (source, target)
                 for target in imports(path)
-                if target.split(".")[0] in ("fsi_orchestrator", *ADAPTERS)
+                if target.split(".")[0] in (*PRODUCT, *BENCHMARKS)
             )
     return found
 
@@ -91,3 +95,17 @@ def test_no_adapter_imports_the_other():
         if within(s, ADAPTERS) and within(t, ADAPTERS) and s.split(".")[0] != t.split(".")[0]
     )
     assert ties == []
+
+
+def test_no_product_module_imports_the_benchmarks():
+    wrong = sorted((s, t) for s, t in edges() if within(t, BENCHMARKS))
+    assert wrong == []
+
+
+def test_the_benchmarks_stand_outside_the_product():
+    assert all((ROOT / name / "__init__.py").is_file() for name in BENCHMARKS)
+    assert not any(
+        path.stem.startswith("turek") or path.stem == "plane_strain"
+        for top in PRODUCT
+        for path in (ROOT / top).rglob("*.py")
+    )

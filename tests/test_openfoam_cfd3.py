@@ -14,7 +14,8 @@ import shutil
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam.turek_cfd3 import (
+from fsi_orchestrator.case.schema import Turbulence
+from turek_hron.cfd3 import (
     DRAG_MEAN_REF,
     FREQUENCY_REF_HZ,
     LIFT_AMPLITUDE_REF,
@@ -23,7 +24,6 @@ from fluid_adapter.openfoam.turek_cfd3 import (
     run_cfd3_models,
     shedding_statistics,
 )
-from fsi_orchestrator.case.schema import Turbulence
 
 
 def test_shedding_statistics_of_a_known_signal():

@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam.turek import DRAG_REF_N_M, LIFT_REF_N_M, run_cfd1
+from turek_hron.channel import DRAG_REF_N_M, LIFT_REF_N_M, run_cfd1
 
 pytestmark = [
     pytest.mark.openfoam,

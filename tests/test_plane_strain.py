@@ -1,4 +1,4 @@
-"""Plane-strain St. Venant-Kirchhoff flag (solid_adapter.plane_strain).
+"""Plane-strain St. Venant-Kirchhoff flag (turek_hron.plane_strain).
 
 References:
 - Turek & Hron (2006), "Proposal for numerical benchmarking of fluid-structure interaction
@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from fsi_orchestrator.participant import Participant
-from solid_adapter.plane_strain import (
+from turek_hron.plane_strain import (
     FlagGeometry,
     FlagIntegrator,
     SvkMaterial,

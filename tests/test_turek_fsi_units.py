@@ -1,4 +1,4 @@
-"""The per-unit-depth view of a one-cell-thick 2D fluid (fluid_adapter.openfoam.turek_fsi).
+"""The per-unit-depth view of a one-cell-thick 2D fluid (turek_hron.fsi).
 
 Hand-checkable: a fluid reporting nodal forces for a span of 0.01 m must hand the plane-strain
 solid (which works per metre of depth) 100 times those forces, and change nothing else.
@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam.turek_fsi import PerUnitDepth
-from fsi_orchestrator.cli.turek_hron import FsiHistory
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, Participant, State
+from turek_hron.fsi import PerUnitDepth
+from turek_hron.run import FsiHistory
 
 
 class SpanFluid:

@@ -14,8 +14,8 @@ import shutil
 import numpy as np
 import pytest
 
-from fluid_adapter.openfoam.turek_fsi import FSI1
-from fsi_orchestrator.cli.turek_hron import run_fsi1
+from turek_hron.fsi import FSI1
+from turek_hron.run import run_fsi1
 
 pytestmark = [
     pytest.mark.openfoam,

@@ -109,15 +109,3 @@ def read_loads(
         pressure_pa=np.concatenate(pressure),
         face_forces=np.concatenate(forces),
     )
-
-
-def read_force_dat(case: Path) -> NDArray:
-    """All rows (t, F_total (3)) of the ``forces`` function object, every launch in time order."""
-    rows = []
-    for folder in sorted(
-        (case / "postProcessing").glob("fishForces/*"), key=lambda p: float(p.name)
-    ):
-        text = (folder / "force.dat").read_text().replace("(", " ").replace(")", " ")
-        data = np.atleast_2d(np.loadtxt(text.splitlines(), comments="#"))
-        rows.append(data[:, :4])
-    return np.concatenate(rows) if rows else np.zeros((0, 4))

@@ -1,7 +1,7 @@
 """Turek & Hron (2006) CFD3: periodic vortex shedding past the cylinder with its rigid flag.
 
-Same channel, body, mesh and fluid as CFD1 (turek.py) with the inflow raised to a mean of
-2 m/s (Re = 200). Reference, per unit depth (Turek & Hron 2006, Table "CFD3"): drag
+Same channel, body, mesh and fluid as CFD1 (turek_hron/channel.py) with the inflow raised to a
+mean of 2 m/s (Re = 200). Reference, per unit depth (Turek & Hron 2006, Table "CFD3"): drag
 439.45 +- 5.6183 N/m, lift -11.893 +- 437.81 N/m (mean +- amplitude), lift frequency
 4.3956 Hz.
 
@@ -25,10 +25,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fsi_orchestrator.case.schema import TimeScheme, Turbulence
-
-from . import runner
-from .casefiles import (
+from fluid_adapter.openfoam import runner
+from fluid_adapter.openfoam.casefiles import (
     FORCES_FO,
     FlowSettings,
     control_dict,
@@ -36,11 +34,12 @@ from .casefiles import (
     fv_solution,
     turbulence_properties,
 )
-from .casefiles import initial_fields as fish_fields
-from .foamio import write_dict
-from .foamrun import numeric_dirs
-from .loads import read_force_dat
-from .turek import (
+from fluid_adapter.openfoam.casefiles import initial_fields as fish_fields
+from fluid_adapter.openfoam.foamio import write_dict
+from fluid_adapter.openfoam.foamrun import numeric_dirs
+from fsi_orchestrator.case.schema import TimeScheme, Turbulence
+
+from .channel import (
     BODY,
     DEPTH,
     INLET,
@@ -52,6 +51,7 @@ from .turek import (
     channel_fields,
     channel_settings,
     generate_steady,
+    read_force_dat,
 )
 
 U_MEAN_CFD3 = 2.0

@@ -1,5 +1,5 @@
 """Turek & Hron (2006) FSI benchmarks composed: the plane-strain flag
-(solid_adapter.plane_strain), the channel flow (fluid_adapter.openfoam.turek_fsi) and the
+(turek_hron.plane_strain), the channel flow (turek_hron.fsi) and the
 coupling, window by window.
 
 Steady FSI1: the flag is quasi-static (StaticFlagIntegrator) and the windows are pseudo-time:
@@ -18,8 +18,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fluid_adapter.openfoam.participant import OpenFoamParticipant
-from fluid_adapter.openfoam.turek import DEPTH, cell_count
-from fluid_adapter.openfoam.turek_fsi import (
+from fsi_orchestrator.coupling import Coupling, CouplingSettings
+from fsi_orchestrator.coupling_settings import IQNILSScheme
+
+from .channel import DEPTH, cell_count
+from .fsi import (
     FSI1,
     PerUnitDepth,
     TurekHronFsi,
@@ -27,10 +30,7 @@ from fluid_adapter.openfoam.turek_fsi import (
     build_fluid,
     generate_fsi_case,
 )
-from solid_adapter.plane_strain import FlagParticipant, build_flag_participant
-
-from ..coupling import Coupling, CouplingSettings
-from ..coupling_settings import IQNILSScheme
+from .plane_strain import FlagParticipant, build_flag_participant
 
 
 @dataclass

@@ -52,10 +52,15 @@ from fsi_orchestrator.participant import (
     InterfaceMesh,
     State,
 )
-
-from .mesh import QuadratureData
-from .shell import SparsePattern
-from .solvers import AlphaParameters, DynamicState, NewtonSettings, SolverError, solve_linear
+from solid_adapter.mesh import QuadratureData
+from solid_adapter.shell import SparsePattern
+from solid_adapter.solvers import (
+    AlphaParameters,
+    DynamicState,
+    NewtonSettings,
+    SolverError,
+    solve_linear,
+)
 
 TRACTION = "traction"  # (n, 3) N/m2 on the interface points, per unit depth: N/m per m of edge
 DIM = 2

@@ -1,8 +1,8 @@
 """Turek & Hron (2006) FSI benchmarks: the channel flow around the cylinder and the flag.
 
-Same channel, cylinder and flag as CFD1 (turek.py), fluid rho = 1000 kg/m3, nu = 1e-3 m2/s,
-parabolic inflow; the flag is a St. Venant-Kirchhoff solid in plane strain
-(solid_adapter.plane_strain, rho_s = 1000 kg/m3, nu_s = 0.4):
+Same channel, cylinder and flag as CFD1 (turek_hron/channel.py), fluid rho = 1000 kg/m3,
+nu = 1e-3 m2/s, parabolic inflow; the flag is a St. Venant-Kirchhoff solid in plane strain
+(turek_hron.plane_strain, rho_s = 1000 kg/m3, nu_s = 0.4):
 
 * FSI1: mean inflow 0.2 m/s, mu_s = 0.5e6 Pa (Re = 20): a steady deflection;
 * FSI3: mean inflow 2 m/s, mu_s = 2e6 Pa (Re = 200): self-excited oscillation at about 5.3 Hz.
@@ -18,7 +18,7 @@ the plane-strain flag works per unit depth (N/m). ``PerUnitDepth`` divides the f
 DEPTH on their way to the coupling; drag and lift are reported per unit depth as well.
 
 This module is the fluid's side; the coupled runs (flag + channel + coupling) are composed in
-fsi_orchestrator/cli/turek_hron.py.
+turek_hron/run.py.
 """
 
 from __future__ import annotations
@@ -32,19 +32,19 @@ import numpy as np
 from foamlib import FoamFieldFile
 from numpy.typing import NDArray
 
+from fluid_adapter.openfoam import runner
+from fluid_adapter.openfoam.casefiles import BODY_MOTION_BC, MOTION_FIELD, FlowSettings
+from fluid_adapter.openfoam.drivers import RelaunchDriver
+from fluid_adapter.openfoam.foamio import write_dict
+from fluid_adapter.openfoam.foamrun import FoamRun, numeric_dirs
+from fluid_adapter.openfoam.interface import read_interface
+from fluid_adapter.openfoam.loads import read_loads
+from fluid_adapter.openfoam.participant import OpenFoamParticipant
+from fluid_adapter.openfoam.tankcase import write_system
 from fsi_orchestrator.case.schema import TimeScheme
 from fsi_orchestrator.participant import FORCE, InterfaceMesh, Participant, State
 
-from . import runner
-from .casefiles import BODY_MOTION_BC, MOTION_FIELD, FlowSettings
-from .drivers import RelaunchDriver
-from .foamio import write_dict
-from .foamrun import FoamRun, numeric_dirs
-from .interface import read_interface
-from .loads import read_loads
-from .participant import OpenFoamParticipant
-from .tankcase import write_system
-from .turek import (
+from .channel import (
     CYLINDER,
     DEPTH,
     FLAG,

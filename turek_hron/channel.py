@@ -19,16 +19,16 @@ from typing import Any
 
 import numpy as np
 from foamlib import FoamFile
+from numpy.typing import NDArray
 
+from fluid_adapter.openfoam import runner
+from fluid_adapter.openfoam.casefiles import FlowSettings, control_dict, fv_schemes, fv_solution
+from fluid_adapter.openfoam.errors import OpenFoamRunError
+from fluid_adapter.openfoam.foamio import read_boundary, write_dict
+from fluid_adapter.openfoam.foamrun import numeric_dirs
+from fluid_adapter.openfoam.interface import read_interface
+from fluid_adapter.openfoam.loads import SurfaceLoads, read_loads
 from fsi_orchestrator.case.schema import TimeScheme, Turbulence
-
-from . import runner
-from .casefiles import FlowSettings, control_dict, fv_schemes, fv_solution
-from .errors import OpenFoamRunError
-from .foamio import read_boundary, write_dict
-from .foamrun import numeric_dirs
-from .interface import read_interface
-from .loads import SurfaceLoads, read_force_dat, read_loads
 
 LENGTH, HEIGHT = 2.5, 0.41
 CENTRE, RADIUS = (0.2, 0.2), 0.05
@@ -269,6 +269,18 @@ def generate_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02)
 def cell_count(case: Path) -> int:
     """Cells of a one-layer mesh: half the faces of its empty front and back."""
     return int(read_boundary(case / "constant" / "polyMesh" / "boundary")[SIDES]["nFaces"]) // 2
+
+
+def read_force_dat(case: Path) -> NDArray:
+    """All rows (t, F_total (3)) of the ``forces`` function object, every launch in time order."""
+    rows = []
+    for folder in sorted(
+        (case / "postProcessing").glob("fishForces/*"), key=lambda p: float(p.name)
+    ):
+        text = (folder / "force.dat").read_text().replace("(", " ").replace(")", " ")
+        data = np.atleast_2d(np.loadtxt(text.splitlines(), comments="#"))
+        rows.append(data[:, :4])
+    return np.concatenate(rows) if rows else np.zeros((0, 4))
 
 
 def run_cfd1(case: Path, body_size: float = 2.5e-3, far_size: float = 0.02) -> Cfd1Result:
