@@ -32,9 +32,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
 from fsi_orchestrator.case.timing import case_schedule  # noqa: E402
-from fsi_orchestrator.cli.compose import coupled_setup, openfoam_fluid_factory  # noqa: E402
 from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
 from fsi_orchestrator.loop import load_checkpoint  # noqa: E402
 from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint  # noqa: E402

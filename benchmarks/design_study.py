@@ -31,7 +31,7 @@ STUDIES = {"fig5_5_peduncle": 60.0, "integrative": 600.0}  # target wall seconds
 def run_study(name: str, output: Path, workers: int) -> tuple[dict, float]:
     start = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.design", str(ROOT / "studies" / name)]
+        [sys.executable, "-m", "fishfsi.cli.design", str(ROOT / "studies" / name)]
         + ["--output", str(output / name), "--workers", str(workers), "--json", "--quiet"],
         capture_output=True,
         text=True,
@@ -45,8 +45,8 @@ def run_study(name: str, output: Path, workers: int) -> tuple[dict, float]:
 
 def converged_errors(best_case: Path, quantity: str, fast: float) -> dict:
     """The best design's objective on finer meshes (linear) and by the time march."""
+    from fishfsi.design.evaluate import linear_figures, transient_figures
     from fsi_orchestrator.case import load_case
-    from fsi_orchestrator.design.evaluate import linear_figures, transient_figures
 
     finer = load_case(best_case, ["mesh.level=fine", "fluid.mesh_level=default"])
     start = time.perf_counter()

@@ -23,9 +23,9 @@ from scipy.optimize import minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.prescribed import first_mode  # noqa: E402
 from fluid_adapter.drag import edge_drag, harmonic_balance_factor  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
-from fsi_orchestrator.cli.prescribed import first_mode  # noqa: E402
 from solid_adapter.build import build_shell_model  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,11 +12,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.compose import shell_with_fast_fluid  # noqa: E402
+from fishfsi.cli.run import run_dynamic  # noqa: E402
+from fishfsi.cli.sweep import linear_sweep, parse_frequencies  # noqa: E402
 from fsi_orchestrator.case import load_case  # noqa: E402
 from fsi_orchestrator.case.schema import Waveform  # noqa: E402
-from fsi_orchestrator.cli.compose import shell_with_fast_fluid  # noqa: E402
-from fsi_orchestrator.cli.run import run_dynamic  # noqa: E402
-from fsi_orchestrator.cli.sweep import linear_sweep, parse_frequencies  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OVERRIDES = ["fluid.model=potential", "fluid.damping_ratio=0.05", "output.vtk=false"]

@@ -1,7 +1,7 @@
 """OpenFOAM's lateral force against potential flow on the same prescribed motion: how much more
 inertia and how much damping the CFD's liquid carries, versus the tail amplitude.
 
-The fixed-head fish moves in its first clamped mode at 3 Hz (fsi_orchestrator.cli.prescribed,
+The fixed-head fish moves in its first clamped mode at 3 Hz (fishfsi.cli.prescribed,
 3 periods of 40 windows); over the last period the lateral force F_z is fitted as
 a sin wt + b cos wt + c, with the tail at A sin wt:
 
@@ -29,9 +29,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.compose import added_mass_for_preconditioning  # noqa: E402
+from fishfsi.cli.prescribed import first_mode, run_prescribed  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
-from fsi_orchestrator.cli.compose import added_mass_for_preconditioning  # noqa: E402
-from fsi_orchestrator.cli.prescribed import first_mode, run_prescribed  # noqa: E402
 from solid_adapter.build import build_shell_model  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

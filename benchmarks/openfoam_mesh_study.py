@@ -22,12 +22,12 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from fsi_orchestrator.case.loader import case_from_dict
-from fsi_orchestrator.cli.prescribed import (
+from fishfsi.cli.prescribed import (
     ACOUSTIC_TAIL_AMPLITUDE_M,
     run_prescribed,
     slender_body_estimate,
 )
+from fsi_orchestrator.case.loader import case_from_dict
 
 PERIODS = 2
 

@@ -26,9 +26,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from fishfsi.cli.prescribed import mode_motion
 from fluid_adapter.openfoam import build_openfoam_participant
 from fsi_orchestrator.case.loader import case_from_dict
-from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE
 
 WINDOWS_PER_PERIOD = 40

@@ -10,8 +10,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.modal import modal_summary  # noqa: E402
 from fsi_orchestrator.case import load_case  # noqa: E402
-from fsi_orchestrator.cli.modal import modal_summary  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

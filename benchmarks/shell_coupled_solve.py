@@ -26,8 +26,8 @@ import scipy.sparse.linalg as spla
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.compose import coupled_setup  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
-from fsi_orchestrator.cli.compose import coupled_setup  # noqa: E402
 from solid_adapter.solvers import factorize  # noqa: E402
 
 CASE = Path(__file__).resolve().parents[1] / "cases" / "fixed_head_3Hz"

@@ -25,10 +25,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from fishfsi.cli.compose import coupled_setup  # noqa: E402
 from fluid_adapter.fast import fast_added_mass  # noqa: E402
 from fluid_adapter.potential.participant import PotentialParticipant  # noqa: E402
 from fsi_orchestrator.case.loader import case_from_dict  # noqa: E402
-from fsi_orchestrator.cli.compose import coupled_setup  # noqa: E402
 from fsi_orchestrator.convergence import CouplingDivergenceError  # noqa: E402
 from fsi_orchestrator.loop import OutputSettings, Schedule, WindowLoop  # noqa: E402
 from fsi_orchestrator.participant import DISPLACEMENT, PAST_DISPLACEMENT, VELOCITY  # noqa: E402

@@ -7,14 +7,20 @@
 
 ``summary`` holds the keys ``fsi-run --json`` prints; :class:`Results` reads the time series
 of ``results.h5``. Bad input raises :class:`CaseError` with the one line the commands print.
+
+The orchestrator builds no solver: the application layer that composes the adapters (fishfsi's
+``fishfsi.cli.root``) registers itself as the entry point ``fsi_orchestrator.composition``, and
+``load_case`` and ``run`` look it up, so that no import runs from here up to it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from functools import cache
+from importlib.metadata import entry_points
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import h5py
 import numpy as np
@@ -25,14 +31,47 @@ from .case.loader import load_case as _read_case
 
 __all__ = ["Case", "CaseError", "Results", "load_case", "run"]
 
+COMPOSITION_GROUP = "fsi_orchestrator.composition"
+
+
+class CompositionRoot(Protocol):
+    """What the API needs of the application layer (the entry point's object)."""
+
+    def check_plausible(self, case: Case) -> None: ...
+
+    def execute(
+        self,
+        case: Case,
+        output: Path,
+        resume: bool,
+        overwrite: bool,
+        show_progress: bool,
+        overrides: Sequence[str] = (),
+    ) -> dict[str, Any]: ...
+
+
+@cache
+def composition_root() -> CompositionRoot:
+    """The installed application layer, found through its entry point (fishfsi's, in this
+    project); one line naming the group when none is installed."""
+    found = sorted(entry_points(group=COMPOSITION_GROUP), key=lambda ep: ep.name)
+    if not found:
+        raise RuntimeError(
+            f"fsi_orchestrator: no composition root installed (entry point group "
+            f"{COMPOSITION_GROUP!r}); install the application package: pip install -e ."
+        )
+    if len(found) > 1:
+        names = ", ".join(f"{ep.name} = {ep.value}" for ep in found)
+        raise RuntimeError(f"fsi_orchestrator: several composition roots installed: {names}")
+    root: CompositionRoot = found[0].load()
+    return root
+
 
 def load_case(path: str | Path, overrides: Iterable[str] = ()) -> Case:
     """The validated case in ``path`` (a folder with ``case.toml``, or the file), with
     ``section.key=value`` overrides (``--set``); refused like the commands refuse it."""
-    from .cli.common import check_plausible  # the composition root knows the plate's sizes
-
     case = _read_case(path, list(overrides), allow_empty=False)
-    check_plausible(case)
+    composition_root().check_plausible(case)  # the composition root knows the plate's sizes
     return case
 
 
@@ -105,9 +144,9 @@ def run(
 ) -> Results:
     """Run ``case`` as ``fsi-run`` does (into ``output``, default ``CASE/output``).
     ``overrides``: the ``--set`` lines the case was loaded with, recorded in results.h5."""
-    from .cli.run import execute  # the composition root builds the participants
-
     folder = Path(output) if output is not None else case.directory / "output"
-    summary = execute(case, folder, resume, overwrite, progress, list(overrides))
+    summary = composition_root().execute(  # the composition root builds the participants
+        case, folder, resume, overwrite, progress, list(overrides)
+    )
     path = summary.get("results")
     return Results(summary=summary, path=Path(path) if path else None)

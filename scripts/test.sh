@@ -12,11 +12,11 @@ if [ "$(id -u)" -eq 0 ] && ! command -v slurmctld >/dev/null 2>&1; then
     || echo "test: SLURM could not be installed; the cluster-sweep test will be skipped" >&2
 fi
 # lint and format first: seconds, and a failure names the file and line
-PY_PATHS="fsi_orchestrator solid_adapter fluid_adapter turek_hron tests benchmarks"
+PY_PATHS="fsi_orchestrator solid_adapter fluid_adapter fishfsi turek_hron tests benchmarks"
 echo "test: ruff check and ruff format --check on $PY_PATHS" >&2
 .venv/bin/ruff check $PY_PATHS
 .venv/bin/ruff format --check $PY_PATHS
-# types: the three packages and turek_hron, strict on the core (pyproject.toml [tool.mypy])
+# types: the four packages and turek_hron, strict on the core (pyproject.toml [tool.mypy])
 echo "test: mypy (pyproject.toml [tool.mypy])" >&2
 .venv/bin/mypy
 exec .venv/bin/python -m pytest "$@"

@@ -21,7 +21,7 @@ def test_the_api_runs_a_case_as_fsi_run_does(tmp_path):
     case = fsi.load_case(ROOT / "cases/fish_vacuum_3Hz", overrides=SETTINGS)
     results = fsi.run(case, tmp_path / "api", overrides=SETTINGS)
     cli = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(ROOT / "cases/fish_vacuum_3Hz")]
+        [sys.executable, "-m", "fishfsi.cli.run", str(ROOT / "cases/fish_vacuum_3Hz")]
         + [a for s in SETTINGS for a in ("--set", s)]
         + ["--json", "--quiet", "--output", str(tmp_path / "cli")],
         capture_output=True,
@@ -46,3 +46,28 @@ def test_the_api_runs_a_case_as_fsi_run_does(tmp_path):
 def test_the_api_refuses_bad_input_with_the_commands_line():
     with pytest.raises(fsi.CaseError, match=r"actuation.frequency_hz must be > 0, got -3"):
         fsi.load_case(ROOT / "cases/fish_vacuum_3Hz", overrides=["actuation.frequency_hz=-3"])
+
+
+def test_the_api_finds_the_application_layer_without_importing_it(monkeypatch):
+    """``import fsi_orchestrator`` alone loads and checks a case (the composition root comes
+    through its entry point), and says in one line when no application layer is installed."""
+    from fsi_orchestrator import api
+
+    script = (
+        "import sys, fsi_orchestrator as fsi\n"
+        "assert not any(m.startswith('fishfsi') for m in sys.modules)\n"
+        f"fsi.load_case({str(ROOT / 'cases/fish_vacuum_3Hz')!r})\n"
+        "print(sorted(m for m in sys.modules if m.startswith('fishfsi')))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, cwd="/"
+    )
+    assert "fishfsi.cli.root" in done.stdout
+
+    api.composition_root.cache_clear()
+    monkeypatch.setattr(api, "entry_points", lambda group: [])
+    try:
+        with pytest.raises(RuntimeError, match=r"no composition root installed .*pip install"):
+            fsi.load_case(ROOT / "cases/fish_vacuum_3Hz")
+    finally:
+        api.composition_root.cache_clear()

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
+from fishfsi.cli import modal as modal_cli
+from fishfsi.cli import run as run_cli
 from fsi_orchestrator.case.params import spec_of
 from fsi_orchestrator.case.schema import SECTIONS
-from fsi_orchestrator.cli import modal as modal_cli
-from fsi_orchestrator.cli import run as run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent

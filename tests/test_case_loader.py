@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from fishfsi.cli import modal as modal_cli
+from fishfsi.cli import run as run_cli
 from fsi_orchestrator.case import CaseError, load_case, parse_override
 from fsi_orchestrator.case.schema import AnalysisKind, Waveform
-from fsi_orchestrator.cli import modal as modal_cli
-from fsi_orchestrator.cli import run as run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -125,7 +125,7 @@ def test_cli_bad_input_exits_2_with_one_line(tmp_path, capsys):
 def test_console_script_prints_no_traceback(tmp_path):
     write_case(tmp_path, "[time]\nperiods = 0\n")
     proc = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(tmp_path)],
+        [sys.executable, "-m", "fishfsi.cli.run", str(tmp_path)],
         capture_output=True,
         text=True,
         cwd=ROOT,

@@ -140,7 +140,7 @@ def test_killed_coupled_run_resumes_to_the_same_result(tmp_path, text):
     """kill -9 a partitioned, added-mass preconditioned IQN run mid-way, --resume: the same
     history (accelerator Jacobian and predictor restored) as an uninterrupted run, to 1e-6."""
     assert "explicit_periods" in EXPLICIT_START and "periods = 2" in EXPLICIT_START
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     ref, case = tmp_path / "ref", tmp_path / "killed"
     for folder in (ref, case):
         folder.mkdir()
@@ -177,7 +177,7 @@ def test_a_learned_jacobian_that_does_not_fit_is_refused_in_one_line(tmp_path):
     """coupling.jacobian_from: a missing file, a run without a quasi-Newton Jacobian
     (explicit-am) and a run on another shell mesh each stop the run before it starts, with one
     line naming the key and the file."""
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     (tmp_path / "case.toml").write_text(BEAM)
     explicit = ["--set", "coupling.scheme=explicit-am", "--set", "time.periods=0.2"]
     other_mesh = ["--set", "mesh.level=default", "--set", "time.periods=0.2"]
@@ -204,7 +204,7 @@ def test_a_warm_started_run_reruns_in_its_own_folder_and_resumes_without_the_sou
     """coupling.jacobian_from may name the folder the run writes to (a rerun: the Jacobian is
     read before anything is overwritten), and --resume takes the Jacobian of the run's own
     checkpoint, so a warm-started run goes on after its source is gone."""
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     (tmp_path / "case.toml").write_text(BEAM)
 
     def fsi_run(output: str, periods: float, *extra: str) -> dict:
@@ -231,7 +231,7 @@ def test_a_run_resumed_with_another_scheme_goes_on_from_where_it_stopped(tmp_pat
     structure's load restart from the last window's f, so both tightly converged halves
     continue the uninterrupted iqn-ils-am run to 1e-6; an explicit-am start-up continued with
     iqn-ils-am is iterated from there on (the summary counts its explicit windows)."""
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     (tmp_path / "case.toml").write_text(BEAM)
     tight = ["--set", "coupling.tolerance_rel=1e-8", "--set", "coupling.max_iterations=100"]
 
@@ -268,7 +268,7 @@ def test_a_resume_that_does_not_fit_the_case_is_refused_in_one_line(tmp_path):
     """--resume after the case changed (another shell mesh, another time step) or with the
     results file gone stops with one line naming the file and what to do, before anything is
     overwritten."""
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     (tmp_path / "case.toml").write_text(BEAM)
     half = ["--set", "time.periods=0.5"]
     assert subprocess.run([*cmd, str(tmp_path), *half], capture_output=True).returncode == 0

@@ -15,11 +15,11 @@ import h5py
 import numpy as np
 import pytest
 
+from fishfsi.cli import design as design_cli
+from fishfsi.cli.sweep import linear_sweep
+from fishfsi.design.study import parse_constraint
 from fsi_orchestrator.case import load_case
 from fsi_orchestrator.case.schema import Waveform
-from fsi_orchestrator.cli import design as design_cli
-from fsi_orchestrator.cli.sweep import linear_sweep
-from fsi_orchestrator.design.study import parse_constraint
 
 ROOT = Path(__file__).resolve().parents[1]
 BEAM = ROOT / "cases/beam_in_liquid"
@@ -187,9 +187,9 @@ def test_optimize_keeps_its_budget_and_improves_on_its_space_filling_start(tmp_p
     """Differential evolution on a closed-form score (the evaluation replaced by a quadratic
     with its maximum at 4.4 Hz, 0.3 mm): at most `budget` designs, none twice, and a best
     closer to the maximum than the best of the Sobol start."""
-    from fsi_orchestrator.design import methods, runner
-    from fsi_orchestrator.design.evaluate import EvaluationSpec, design_key
-    from fsi_orchestrator.design.study import load_study
+    from fishfsi.design import methods, runner
+    from fishfsi.design.evaluate import EvaluationSpec, design_key
+    from fishfsi.design.study import load_study
 
     text = STUDY.replace("points = 3", "budget = 60\ninitial = 12").replace(
         '"one-at-a-time"', '"optimize"'
@@ -227,7 +227,7 @@ def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_h
 ):
     """The OpenFOAM runs replaced by a record whose score reverses the fast ranking: the
     reruns get fluid.model = openfoam at the coarse level, by time march, best first."""
-    from fsi_orchestrator.design.evaluate import design_key
+    from fishfsi.design.evaluate import design_key
 
     folder, out, _ = finished
     shutil.copytree(out, tmp_path / "out")

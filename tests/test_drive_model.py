@@ -82,7 +82,7 @@ def test_a_buckling_mean_voltage_stops_the_run_in_one_line(tmp_path):
         [
             sys.executable,
             "-m",
-            "fsi_orchestrator.cli.run",
+            "fishfsi.cli.run",
             str(ROOT / "cases" / "seed" / "integrative_prototype"),
             "--set",
             "actuation.mean_strain_transfer=1",
@@ -120,7 +120,7 @@ def test_integrative_prototype_runs_without_buckling(tmp_path):
     reports that its drive's held mean cannot buckle it."""
     folder = str(ROOT / "cases" / "seed" / "integrative_prototype")
     run = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.run", folder, "--json"]
+        [sys.executable, "-m", "fishfsi.cli.run", folder, "--json"]
         + ["--set", "time.periods=0.25", "--output", str(tmp_path / "out")],
         capture_output=True,
         text=True,
@@ -130,7 +130,7 @@ def test_integrative_prototype_runs_without_buckling(tmp_path):
     summary = json.loads(run.stdout)
     assert np.isfinite(summary["tip_max_abs_m"]) and summary["tip_max_abs_m"] > 1e-3
     modal = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.modal", folder, "--json"],
+        [sys.executable, "-m", "fishfsi.cli.modal", folder, "--json"],
         capture_output=True,
         text=True,
         timeout=900,

@@ -61,7 +61,7 @@ def test_fast_transient_with_drag_is_periodic_near_openfoams_amplitude(tmp_path)
     (default level, docs/coupling.md). The rest is OpenFOAM's larger inertia (1.27 times the
     potential added mass at this amplitude)."""
     run = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(ROOT / "cases" / "fixed_head_3Hz")]
+        [sys.executable, "-m", "fishfsi.cli.run", str(ROOT / "cases" / "fixed_head_3Hz")]
         + ["--set", "fluid.model=potential", "--set", "fluid.edge_drag=true"]
         + ["--set", "time.periods=2", "--json", "--output", str(tmp_path / "out")],
         capture_output=True,
@@ -75,7 +75,7 @@ def test_fast_transient_with_drag_is_periodic_near_openfoams_amplitude(tmp_path)
     # the linear sweep linearizes the same drag about its own response (and oscillates about
     # the mean-voltage prestressed tangent, which the transient's start does not): 8.42 mm
     sweep = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.sweep", str(ROOT / "cases" / "fixed_head_3Hz")]
+        [sys.executable, "-m", "fishfsi.cli.sweep", str(ROOT / "cases" / "fixed_head_3Hz")]
         + ["--set", "fluid.edge_drag=true", "--frequencies", "3", "--waveforms", "sine"]
         + ["--json", "--output", str(tmp_path / "sweep")],
         capture_output=True,

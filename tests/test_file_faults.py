@@ -20,12 +20,12 @@ import numpy as np
 import pytest
 
 import fsi_orchestrator
+from fishfsi.cli import modal as modal_cli
+from fishfsi.cli import post as post_cli
+from fishfsi.cli import run as run_cli
+from fishfsi.cli import sweep as sweep_cli
 from fsi_orchestrator import results as results_mod
 from fsi_orchestrator.case import CaseError, load_case
-from fsi_orchestrator.cli import modal as modal_cli
-from fsi_orchestrator.cli import post as post_cli
-from fsi_orchestrator.cli import run as run_cli
-from fsi_orchestrator.cli import sweep as sweep_cli
 from fsi_orchestrator.provenance import case_dict
 from fsi_orchestrator.results import OutputError, ResultsFile
 

@@ -1,14 +1,17 @@
-"""The house's floors, read from every module's imports (also those inside functions):
+"""The house's floors, read from every module's imports (also those inside functions). Imports
+run one way, down: ``fsi_orchestrator`` (the ground floor) <- ``solid_adapter``,
+``fluid_adapter`` <- ``fishfsi`` (the application layer) <- ``turek_hron`` (and benchmarks/).
 
 - the core an adapter may use: ``fsi_orchestrator.case`` (the schema, the plate's planform) and
   ``fsi_orchestrator.participant`` (the contract);
-- the orchestrator's own rooms (loop, coupling, acceleration, mapping, results, ...) import no
-  adapter: they know solvers through the Participant protocol only;
-- only the application layer (``fsi_orchestrator.cli``, ``fsi_orchestrator.design``, the API's
-  ``run``) composes the adapters;
+- the orchestrator imports no adapter and no application layer: it knows solvers through the
+  Participant protocol only, and its Python API (``load_case``, ``run``) finds the composition
+  root through the entry point ``fsi_orchestrator.composition``, not by import;
+- only the application layer (``fishfsi.cli``, ``fishfsi.design``) composes the adapters, and
+  no adapter imports it;
 - no adapter imports the other: what both need about the plate (its planform) is the core's
   ``fsi_orchestrator.case.planform``, and what needs both (the shell's first mode as the fluid's
-  prescribed motion) is the application layer's (``fsi_orchestrator.cli.prescribed``);
+  prescribed motion) is the application layer's (``fishfsi.cli.prescribed``);
 - the benchmark geometries (``turek_hron``: the Turek & Hron channel, the plane-strain flag)
   stand beside the product: they may import it, no product module imports them.
 """
@@ -16,14 +19,24 @@
 from __future__ import annotations
 
 import ast
+import tomllib
+from importlib.metadata import entry_points
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 ADAPTERS = ("solid_adapter", "fluid_adapter")
 CORE = ("fsi_orchestrator.case", "fsi_orchestrator.participant")
-APP = ("fsi_orchestrator.cli", "fsi_orchestrator.design", "fsi_orchestrator.api")
-PRODUCT = ("fsi_orchestrator", *ADAPTERS)
+APP = ("fishfsi",)
+PRODUCT = ("fsi_orchestrator", *ADAPTERS, *APP)
 BENCHMARKS = ("turek_hron",)
+# the floor of each top-level package: an import may run to a lower or the same floor only
+FLOOR = {
+    "fsi_orchestrator": 0,
+    "solid_adapter": 1,
+    "fluid_adapter": 1,
+    "fishfsi": 2,
+    "turek_hron": 3,
+}
 
 
 def module_name(path: Path) -> str:
@@ -47,9 +60,9 @@ def imports(path: Path) -> set[str]:
     return found
 
 
-def edges() -> set[tuple[str, str]]:
+def edges(tops: tuple[str, ...] = PRODUCT) -> set[tuple[str, str]]:
     found = set()
-    for top in PRODUCT:
+    for top in tops:
         for path in (ROOT / top).rglob("*.py"):
             source = module_name(path)
             found.update(
@@ -65,7 +78,7 @@ def within(name: str, prefixes: tuple[str, ...]) -> bool:
 
 
 def test_the_resolver_sees_relative_and_function_level_imports():
-    names = imports(ROOT / "fsi_orchestrator/cli/run.py")
+    names = imports(ROOT / "fishfsi/cli/run.py")
     assert "fsi_orchestrator.loop" in names  # from ..loop import ...
     assert "solid_adapter.build" in names  # inside run_dynamic
 
@@ -79,13 +92,35 @@ def test_adapters_use_only_the_core_of_the_orchestrator():
     assert wrong == []
 
 
-def test_the_orchestrator_outside_its_application_layer_imports_no_adapter():
+def test_the_orchestrator_imports_no_adapter():
     wrong = sorted(
-        (s, t)
-        for s, t in edges()
-        if s.startswith("fsi_orchestrator") and not within(s, APP) and within(t, ADAPTERS)
+        (s, t) for s, t in edges() if within(s, ("fsi_orchestrator",)) and within(t, ADAPTERS)
     )
     assert wrong == []
+
+
+def test_neither_the_orchestrator_nor_an_adapter_imports_the_application_layer():
+    wrong = sorted((s, t) for s, t in edges() if not within(s, APP) and within(t, APP))
+    assert wrong == []
+
+
+def test_imports_run_one_way_down_the_floors():
+    assert set(FLOOR) == {*PRODUCT, *BENCHMARKS}
+    up = sorted(
+        (s, t)
+        for s, t in edges((*PRODUCT, *BENCHMARKS))
+        if FLOOR[t.split(".")[0]] > FLOOR[s.split(".")[0]]
+    )
+    assert up == []
+
+
+def test_the_api_finds_the_composition_root_through_its_entry_point():
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"]
+    assert declared["fsi_orchestrator.composition"] == {"fishfsi": "fishfsi.cli.root"}
+    (found,) = entry_points(group="fsi_orchestrator.composition")  # the installed package's
+    assert found.value == "fishfsi.cli.root"
+    root = found.load()
+    assert callable(root.check_plausible) and callable(root.execute)
 
 
 def test_no_adapter_imports_the_other():

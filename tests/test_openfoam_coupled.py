@@ -37,7 +37,7 @@ SMALL = [
     "output.vortex_q_level=0.3",  # the tail's edge vortices from the second window on
 ]
 TAIL_X = 0.16676  # the original fish's trailing edge at mid-height (m, from the nose)
-CMD = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+CMD = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
 
 
 def fsi_run(case: Path, output: Path, *extra: str) -> list[str]:
@@ -140,7 +140,7 @@ def test_fsi_run_couples_the_shell_to_openfoam(world_searchable):
     assert 0.05 < np.abs(force[:, 2]).max() < 10
     assert_flow_slices(out, [2, 4], np.array(summary["tip_displacement_m"]))
     # fsi-post draws the run and its last flow slice
-    post = [sys.executable, "-m", "fsi_orchestrator.cli.post", str(out)]
+    post = [sys.executable, "-m", "fishfsi.cli.post", str(out)]
     done = subprocess.run(post, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     pictures = ["run.png", "flow.png", "fish3d.png", "period.gif"]

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fishfsi.cli.prescribed import mode_motion
 from fluid_adapter.openfoam import build_openfoam_participant, runner
 from fluid_adapter.openfoam.build import prepare_case
 from fluid_adapter.openfoam.drivers import run_batch
@@ -28,7 +29,6 @@ from fluid_adapter.openfoam.interface import read_interface
 from fluid_adapter.openfoam.tankcase import flow_settings
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
-from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE
 
 pytestmark = [

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from foamlib import FoamFile
 
+from fishfsi.cli.prescribed import mode_motion
 from fluid_adapter.openfoam import (
     MeshQualityError,
     OpenFoamNotFoundError,
@@ -21,7 +22,6 @@ from fluid_adapter.openfoam.checkmesh import check_mesh
 from fluid_adapter.openfoam.foamio import read_points, update_dict, write_dict
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
-from fsi_orchestrator.cli.prescribed import mode_motion
 from fsi_orchestrator.participant import DISPLACEMENT
 
 needs_openfoam = pytest.mark.skipif(

@@ -13,11 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fishfsi.cli.prescribed import LARGEST_TAIL_AMPLITUDE_M, check_motion
 from fluid_adapter.openfoam.fishmesh import LEVELS, tank_geometry, tank_topology
 from fluid_adapter.openfoam.motion import max_safe_amplitude
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import MeshLevel
-from fsi_orchestrator.cli.prescribed import LARGEST_TAIL_AMPLITUDE_M, check_motion
 
 needs_openfoam = pytest.mark.skipif(
     shutil.which("pimpleFoam") is None, reason="OpenFOAM not installed"

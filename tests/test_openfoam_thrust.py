@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from foamlib import FoamFieldFile
 
-from fsi_orchestrator.case.loader import case_from_dict
-from fsi_orchestrator.cli.prescribed import (
+from fishfsi.cli.prescribed import (
     ACOUSTIC_TAIL_AMPLITUDE_M,
     run_prescribed,
     slender_body_estimate,
 )
+from fsi_orchestrator.case.loader import case_from_dict
 
 pytestmark = [
     pytest.mark.openfoam,

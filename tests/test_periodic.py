@@ -75,7 +75,7 @@ def test_the_summary_says_periodic_once_every_figure_is_known_to_the_tolerance()
 def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
     case = Path(__file__).resolve().parents[1] / "cases/fish_vacuum_3Hz"
     done = subprocess.run(
-        [sys.executable, "-m", "fsi_orchestrator.cli.run", str(case), "--json", "--quiet"]
+        [sys.executable, "-m", "fishfsi.cli.run", str(case), "--json", "--quiet"]
         + ["--set", "mesh.level=coarse", "--set", "time.periods=2", "--set", "output.vtk=false"]
         + ["--set", "time.steps_per_period=20"]
         + ["--output", str(tmp_path / "run")],

@@ -1,4 +1,4 @@
-"""3D pictures of a run's flow (fsi-post, fsi_orchestrator.cli.pictures) and the OpenFOAM
+"""3D pictures of a run's flow (fsi-post, fishfsi.cli.pictures) and the OpenFOAM
 sampling dictionary behind them (fluid_adapter.openfoam.slices), on synthetic surfaces: the
 frames of the last period, one frame per picture, the Q-criterion level from the drive."""
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from foamlib import FoamFile
 
+from fishfsi.cli import pictures
 from fluid_adapter.openfoam.slices import IsoSurface, Patch, fish_surfaces, write_slice_dict
-from fsi_orchestrator.cli import pictures
 
 
 def write_series(vtk: Path, name: str, meshes: dict[float, object]) -> None:

@@ -10,7 +10,7 @@ import json
 import matplotlib
 import pytest
 
-from fsi_orchestrator.cli import post
+from fishfsi.cli import post
 
 matplotlib.use("Agg")
 

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from fishfsi.cli import run as run_cli
+from fishfsi.cli.modal import modal_summary
 from fluid_adapter.potential.mesh import MeshSizes, SphereDomain, build_fluid_mesh
 from fluid_adapter.potential.model import added_mass
 from fsi_orchestrator.case import load_case
-from fsi_orchestrator.cli import run as run_cli
-from fsi_orchestrator.cli.modal import modal_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 # Table 3.7: original robot, free-free, sphere 0.2 m, FC-3283

@@ -16,11 +16,11 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from fsi_orchestrator.cli.progress import RunProgress, duration, window_line
+from fishfsi.cli.progress import RunProgress, duration, window_line
 from fsi_orchestrator.results import read_checkpoint
 
 ROOT = Path(__file__).resolve().parents[1]
-FSI_RUN = [sys.executable, "-m", "fsi_orchestrator.cli.run"]
+FSI_RUN = [sys.executable, "-m", "fishfsi.cli.run"]
 VACUUM = [str(ROOT / "cases/fish_vacuum_3Hz"), "--set", "mesh.level=coarse"]
 
 

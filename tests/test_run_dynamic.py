@@ -15,8 +15,8 @@ import h5py
 import numpy as np
 import pytest
 
+from fishfsi.cli import run as run_cli
 from fsi_orchestrator.case import CaseError, load_case
-from fsi_orchestrator.cli import run as run_cli
 from fsi_orchestrator.results import ResultsFile
 from solid_adapter.build import run_static
 
@@ -102,7 +102,7 @@ def test_killed_run_resumes_to_the_same_result(tmp_path):
     ref_case, case = tmp_path / "a", tmp_path / "b"
     for folder in (ref_case, case):
         beam_case(folder)
-    cmd = [sys.executable, "-m", "fsi_orchestrator.cli.run", "--quiet", "--json"]
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--quiet", "--json"]
     subprocess.run([*cmd, str(ref_case)], check=True, capture_output=True, env=env)
     proc = subprocess.Popen(
         [*cmd, str(case)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env

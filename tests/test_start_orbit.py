@@ -41,10 +41,10 @@ def test_start_correction_puts_the_shell_on_the_liquids_orbit():
     the potential one, docs/coupling.md). Started on the preconditioner's orbit, the shell's
     tail velocity at t = 0 is 69 % off the liquid's periodic orbit (analytic: the linear
     periodic response with 1.3 M~); after one lead-in period and the fit, within 5 %."""
+    from fishfsi.cli.compose import added_mass_for_preconditioning, coupled_setup
     from fluid_adapter.potential.model import AddedMass
     from fluid_adapter.potential.participant import PotentialParticipant
     from fsi_orchestrator.case.loader import load_case
-    from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, coupled_setup
     from fsi_orchestrator.coupling import Coupling
     from solid_adapter.build import CorrectableStart, periodic_orbit, static_loads
     from solid_adapter.piezo import DriveSignal
@@ -159,9 +159,9 @@ def test_the_fitting_lead_in_period_moves_no_faster_than_the_cfd_resolves():
     the fin at 3.5 m/s, which blew the coarse CFD up within the first lead-in period. That
     period only serves the fit, so it is scaled down to LEAD_IN_MAX_SPEED_M_S; the second
     period blends into the corrected orbit."""
+    from fishfsi.cli.compose import added_mass_for_preconditioning, coupled_setup
     from fluid_adapter.potential.participant import PotentialParticipant
     from fsi_orchestrator.case.loader import load_case
-    from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, coupled_setup
     from fsi_orchestrator.coupling import Coupling
     from fsi_orchestrator.lead_in import LEAD_IN_MAX_SPEED_M_S, periodic_motion
     from fsi_orchestrator.participant import DISPLACEMENT
@@ -212,9 +212,9 @@ def test_a_run_whose_fast_orbit_outruns_the_cfd_starts_from_rest():
     plate where the first coupled window never converged: such a run starts from rest with a
     one-period voltage ramp and two periods added. At 3 Hz (0.33 m/s) the case is run as
     given. The liquid stands in for OpenFOAM: the choice is made before the fluid is built."""
+    from fishfsi.cli.compose import added_mass_for_preconditioning, build_coupled_run
     from fluid_adapter.potential.participant import PotentialParticipant
     from fsi_orchestrator.case.loader import load_case
-    from fsi_orchestrator.cli.compose import added_mass_for_preconditioning, build_coupled_run
     from solid_adapter.shell import NDOF
 
     def stand_in_liquid(case, solid):

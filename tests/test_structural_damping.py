@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fishfsi.cli.compose import shell_with_fast_fluid
 from fsi_orchestrator.case.loader import load_case
-from fsi_orchestrator.cli.compose import shell_with_fast_fluid
 from solid_adapter.build import (
     bending_frequencies,
     build_damping,

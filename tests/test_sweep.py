@@ -9,12 +9,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fishfsi.cli import post as post_cli
+from fishfsi.cli import run as run_cli
+from fishfsi.cli import sweep as sweep_cli
+from fishfsi.cli.compose import shell_with_fast_fluid
 from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.case.schema import Waveform
-from fsi_orchestrator.cli import post as post_cli
-from fsi_orchestrator.cli import run as run_cli
-from fsi_orchestrator.cli import sweep as sweep_cli
-from fsi_orchestrator.cli.compose import shell_with_fast_fluid
 from solid_adapter.build import (
     mean_voltage_equilibrium,
     rayleigh_coefficients,
@@ -83,8 +83,8 @@ def test_fsi_sweep_writes_the_table_and_fsi_post_draws_it(tmp_path, capsys):
 def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, monkeypatch):
     """A run that fails (here: the 2nd of three) becomes a row with NaN and its error; the
     other runs' rows are written and the sweep exits with EXIT_FAILED."""
-    from fsi_orchestrator.cli import run as run_cli
-    from fsi_orchestrator.cli.common import EXIT_FAILED
+    from fishfsi.cli import run as run_cli
+    from fishfsi.cli.common import EXIT_FAILED
 
     real = run_cli.run_dynamic
 
@@ -112,7 +112,7 @@ def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, mo
 def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatch):
     """A point that started from rest (near a wet resonance) is reported as such and the
     sweep still exits 0."""
-    from fsi_orchestrator.cli import run as run_cli
+    from fishfsi.cli import run as run_cli
 
     real = run_cli.run_dynamic
 

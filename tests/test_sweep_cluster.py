@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fsi_orchestrator.cli import run as run_cli
-from fsi_orchestrator.cli import sweep as sweep_cli
-from fsi_orchestrator.cli.common import EXIT_FAILED, EXIT_INTERRUPTED
+from fishfsi.cli import run as run_cli
+from fishfsi.cli import sweep as sweep_cli
+from fishfsi.cli.common import EXIT_FAILED, EXIT_INTERRUPTED
 
 ROOT = Path(__file__).resolve().parents[1]
 BEAM = ROOT / "cases/beam_in_liquid"
@@ -567,9 +567,9 @@ def test_slurm_array_script_runs_one_point_per_task_into_one_table(slurm, tmp_pa
 
 
 def test_point_selects_one_point_and_frequencies_keep_the_key_range():
+    from fishfsi.cli.sweep import parse_frequencies, select_point
     from fsi_orchestrator.case import CaseError
     from fsi_orchestrator.case.schema import Waveform
-    from fsi_orchestrator.cli.sweep import parse_frequencies, select_point
 
     both = [Waveform.SINE, Waveform.SQUARE]
     assert select_point([1.0, 3.0, 5.0], both, 4) == ([3.0], [Waveform.SQUARE])

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from fishfsi.cli import run, sweep
+from fishfsi.cli.swimming import MEASURED, SWIMMING_KEYS, swimming_summary
 from fluid_adapter.swimming import (
     BodyDrag,
     FormDrag,
@@ -20,8 +22,6 @@ from fluid_adapter.swimming import (
 )
 from fsi_orchestrator.case import load_case
 from fsi_orchestrator.case.schema import Waveform
-from fsi_orchestrator.cli import run, sweep
-from fsi_orchestrator.cli.swimming import MEASURED, SWIMMING_KEYS, swimming_summary
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "swim_original_18Hz"

@@ -3,7 +3,7 @@
 The shape comes in as a callable, points (n, 2|3) -> translations (u_x, u_y, u_z) (n, 3),
 scaled so that the tail tip (trailing edge at y = 0) moves 1 m along z; the motion moves it
 ``amplitude_m``. The composition root hands in the clamped fish's first mode from the shell
-solver (fsi_orchestrator/cli/prescribed.py). Default amplitude: the seed's acoustic-model tail
+solver (fishfsi/cli/prescribed.py). Default amplitude: the seed's acoustic-model tail
 amplitude at 3 Hz, about 20 mm (Sec. 3.4.3, Fig. 3.17; shared/reference/seed_data.toml,
 robot_original.transient_acoustic).
 """

@@ -15,7 +15,8 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from ..case import CaseError
+from fsi_orchestrator.case import CaseError
+
 from .evaluate import Design, EvaluationSpec, design_key, evaluate, read_record
 from .study import Study
 
@@ -25,7 +26,7 @@ OnRecord = Callable[[dict], None]
 
 
 def study_identity(study: Study, spec: EvaluationSpec) -> dict:
-    from .. import __version__
+    from fsi_orchestrator import __version__
 
     identity = {"version": __version__, "study": study.identity(), "base": spec.base_raw}
     return json.loads(json.dumps(identity, default=str))

@@ -26,9 +26,8 @@ from fluid_adapter.openfoam.prescribed import (
     PrescribedResult,
     ShapeOnPoints,
 )
-
-from ..case import Case
-from ..case.schema import HeadCondition
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import HeadCondition
 
 __all__ = [
     "ACOUSTIC_TAIL_AMPLITUDE_M",

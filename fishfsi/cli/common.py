@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..case import Case, CaseError, load_case
+from fsi_orchestrator.case import Case, CaseError, load_case
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -43,7 +43,7 @@ class _Version(argparse.Action):
         super().__init__(option_strings, dest, nargs=0, **kwargs)
 
     def __call__(self, parser, namespace, values, option_string=None) -> None:
-        from ..provenance import version
+        from fsi_orchestrator.provenance import version
 
         print(f"{parser.prog} {version()}")
         parser.exit()
@@ -68,9 +68,8 @@ DOMAIN_MARGIN = 0.05
 def check_plausible(case: Case) -> None:
     """Checks across keys that need the resolved plate (a preset's body length): the clamp
     leaves part of the plate free, the tank or sphere holds the plate with a margin."""
+    from fsi_orchestrator.case.schema import FluidDomain, FluidModel
     from solid_adapter.geometry import build_layout  # the composition root may know adapters
-
-    from ..case.schema import FluidDomain, FluidModel
 
     layout = build_layout(case)  # raises CaseError naming the key when the outline is wrong
     length = layout.length_m
@@ -141,9 +140,8 @@ def emit(summary: dict[str, Any], as_json: bool) -> None:
 
 def guarded(body: Callable[[], int]) -> int:
     """Run a CLI body; known failures become one line on stderr and an exit code."""
+    from fsi_orchestrator.loop import ResumeError
     from solid_adapter.solvers import SolverError  # the composition root may know adapters
-
-    from ..loop import ResumeError
 
     try:
         return body()

@@ -19,9 +19,9 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
-from ..case import CaseError, load_case
-from ..case.params import spec_of
-from ..case.schema import SECTIONS
+from fsi_orchestrator.case import CaseError, load_case
+from fsi_orchestrator.case.params import spec_of
+from fsi_orchestrator.case.schema import SECTIONS
 
 STUDY_FILE = "study.toml"
 

@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from ..case import Case
-from ..case.planform import resolve_fish
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.planform import resolve_fish
+
 from .compose import without_cfd
 
 if TYPE_CHECKING:

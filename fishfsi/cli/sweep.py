@@ -35,9 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import Case, CaseError
-from ..case.params import coerce, spec_of
-from ..case.schema import Actuation, AnalysisKind, FluidModel, Waveform
+from fsi_orchestrator.case import Case, CaseError
+from fsi_orchestrator.case.params import coerce, spec_of
+from fsi_orchestrator.case.schema import Actuation, AnalysisKind, FluidModel, Waveform
+
 from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
 from .compose import shell_with_fast_fluid, without_cfd
 from .swimming import SWIMMING_KEYS
@@ -250,10 +251,10 @@ def transient_sweep(
     ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
     the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
     holds a checkpoint continues from it (fsi-run --resume)."""
+    from fsi_orchestrator.loop import ResumeError
+    from fsi_orchestrator.results import CHECKPOINT_FILE
     from solid_adapter.solvers import SolverError
 
-    from ..loop import ResumeError
-    from ..results import CHECKPOINT_FILE
     from .run import run_dynamic
 
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
@@ -325,8 +326,8 @@ def chained(case: Case, previous: Path) -> Case:
     point learned (same shell, another drive: coarse fish, 3 -> 5 Hz, 3.53 -> 3.20 fluid
     solves per window in period 1), unless the case names its own coupling.jacobian_from.
     The results agree to the coupling tolerance with a cold start."""
-    from ..case.schema import CouplingScheme
-    from ..results import CHECKPOINT_FILE
+    from fsi_orchestrator.case.schema import CouplingScheme
+    from fsi_orchestrator.results import CHECKPOINT_FILE
 
     c = case.coupling
     chainable = (
@@ -443,7 +444,7 @@ def folder_lock(folder: Path) -> Iterator[None]:
 def sweep_identity(case: Case, method: str) -> dict:
     """What a sweep's rows depend on besides their point: the case (without its drive
     frequency and waveform, nor its folder), the method and this version."""
-    from .. import __version__
+    from fsi_orchestrator import __version__
 
     fields = to_jsonable(dataclasses.asdict(case))
     fields.pop("directory", None)

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case.loader import CASE_FILE
+from fsi_orchestrator.case.loader import CASE_FILE
+
 from .evaluate import SUMMARY_FILE, atomic_write, finite, is_ok, jsonable
 from .study import Study
 

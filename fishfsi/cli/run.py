@@ -13,13 +13,14 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..case import Case
-from ..case.schema import AnalysisKind, FluidModel
-from ..case.timing import case_schedule, windows_per_period
-from ..loop import OutputSettings, Schedule, StopRule, WindowLoop
-from ..periodic import summary_fields as periodic_fields
-from ..provenance import case_identity, run_attributes
-from ..results import CHECKPOINT_FILE, ResultsFile
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import AnalysisKind, FluidModel
+from fsi_orchestrator.case.timing import case_schedule, windows_per_period
+from fsi_orchestrator.loop import OutputSettings, Schedule, StopRule, WindowLoop
+from fsi_orchestrator.periodic import summary_fields as periodic_fields
+from fsi_orchestrator.provenance import case_identity, run_attributes
+from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
+
 from .common import EXIT_OK, base_parser, emit, load, run_main
 from .compose import (
     build_coupled_run,

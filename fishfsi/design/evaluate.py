@@ -28,10 +28,11 @@ from typing import Any
 
 import numpy as np
 
-from ..case import Case, CaseError
-from ..case.loader import CASE_FILE, case_from_dict, merge_overrides
-from ..case.planform import resolve_fish
-from ..case.schema import AnalysisKind, FluidModel, GeometryKind
+from fsi_orchestrator.case import Case, CaseError
+from fsi_orchestrator.case.loader import CASE_FILE, case_from_dict, merge_overrides
+from fsi_orchestrator.case.planform import resolve_fish
+from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, GeometryKind
+
 from ..cli.sweep import atomic_write  # one atomic writer for every table and record
 from .study import (
     _INDEXED,

@@ -13,9 +13,9 @@ from typing import Any
 import h5py
 import numpy as np
 
-from ..case import CaseError
-from ..loop import ResumeError
-from ..results import (
+from fsi_orchestrator.case import CaseError
+from fsi_orchestrator.loop import ResumeError
+from fsi_orchestrator.results import (
     CHECKPOINT_FILE,
     MIN_FREE_BYTES,
     RESULTS_FILE,

@@ -1,5 +1,5 @@
 """Composition root: builds the solvers a case asks for. With the commands beside it in
-fsi_orchestrator/cli/, the only part of the orchestrator that imports the adapters (lazily, so
+fishfsi/cli/, the only part of the product that imports the adapters (lazily, so
 that `--help` and case errors stay fast)."""
 
 from __future__ import annotations
@@ -10,12 +10,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..case import Case
-from ..case.schema import FluidDomain, FluidModel
-from ..participant import AddedMassPreconditioning, HasAccelerationStencil, Participant
+from fsi_orchestrator.case import Case
+from fsi_orchestrator.case.schema import FluidDomain, FluidModel
+from fsi_orchestrator.participant import (
+    AddedMassPreconditioning,
+    HasAccelerationStencil,
+    Participant,
+)
 
 if TYPE_CHECKING:
-    from ..coupling import Coupling
+    from fsi_orchestrator.coupling import Coupling
 
 
 def without_cfd(case: Case) -> Case:
@@ -50,8 +54,7 @@ def added_mass_for_preconditioning(case: Case, shell_model):
     """The fast model that preconditions the *-am schemes, on the case's fluid domain."""
     from fluid_adapter.potential import build_added_mass
     from fluid_adapter.strip import strip_added_mass
-
-    from ..case.schema import AddedMassModel
+    from fsi_orchestrator.case.schema import AddedMassModel
 
     if case.coupling.added_mass_model is AddedMassModel.STRIP:
         return strip_added_mass(
@@ -65,8 +68,8 @@ def added_mass_for_preconditioning(case: Case, shell_model):
 
 def coupling_settings(case: Case):
     """The case's [coupling] keys on the typed settings of its scheme."""
-    from ..case.timing import windows_per_period
-    from ..coupling_settings import CouplingSettings, scheme_settings
+    from fsi_orchestrator.case.timing import windows_per_period
+    from fsi_orchestrator.coupling_settings import CouplingSettings, scheme_settings
 
     c = case.coupling
     scheme = scheme_settings(
@@ -89,8 +92,8 @@ def coupling_settings(case: Case):
 def lead_in(case: Case) -> dict:
     """One period of fluid-only lead-in when a CFD fluid meets a structure that starts on its
     periodic orbit (Coupling.lead_in)."""
-    from ..case.schema import StartMode
-    from ..case.timing import windows_per_period
+    from fsi_orchestrator.case.schema import StartMode
+    from fsi_orchestrator.case.timing import windows_per_period
 
     if (
         case.fluid.model is not FluidModel.OPENFOAM
@@ -150,8 +153,8 @@ def choose_start(case: Case, solid) -> tuple[Case, str | None]:
     and at 25 Hz the orbit corrected from the capped lead-in started the plate where its
     first coupled window never converged (docs/coupling.md). Such a run starts from rest with
     a voltage ramp instead. Returns (the case as run, why it changed or None)."""
-    from ..case.timing import windows_per_period
-    from ..lead_in import LEAD_IN_MAX_SPEED_M_S, peak_speed
+    from fsi_orchestrator.case.timing import windows_per_period
+    from fsi_orchestrator.lead_in import LEAD_IN_MAX_SPEED_M_S, peak_speed
 
     motion = solid.orbit_motion() if lead_in(case) else None
     if motion is None:
@@ -182,10 +185,9 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     added mass (or from rest, choose_start); with an *-am scheme it keeps that mass."""
     from fluid_adapter.fast import fast_added_mass
     from fluid_adapter.potential.participant import PotentialParticipant
+    from fsi_orchestrator.acceleration import IQNIMVJAcceleration
+    from fsi_orchestrator.coupling import Coupling
     from solid_adapter.build import CorrectableStart, build_shell_model, build_shell_participant
-
-    from ..acceleration import IQNIMVJAcceleration
-    from ..coupling import Coupling
 
     model = build_shell_model(case)
     # read before the fluid is set up: a wrong file fails at once. A resumed run takes the
@@ -235,7 +237,7 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
 
 def learned_jacobian_path(case: Case):
     """The checkpoint coupling.jacobian_from names (a run's output folder or the file)."""
-    from ..results import CHECKPOINT_FILE
+    from fsi_orchestrator.results import CHECKPOINT_FILE
 
     path = case.directory / case.coupling.jacobian_from
     return path / CHECKPOINT_FILE if path.is_dir() else path
@@ -244,8 +246,8 @@ def learned_jacobian_path(case: Case):
 def learned_jacobian(case: Case, n_nodes: int) -> dict:
     """coupling.jacobian_from: the quasi-Newton state saved in that checkpoint (a run's
     output folder or the file), checked against a shell of ``n_nodes`` interface nodes."""
-    from ..case import CaseError
-    from ..results import CHECKPOINT_FILE, read_checkpoint
+    from fsi_orchestrator.case import CaseError
+    from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
 
     path = learned_jacobian_path(case)
     where = f"coupling.jacobian_from: {path}"
@@ -276,8 +278,7 @@ def openfoam_fluid_factory(workdir, *, fresh: bool):
     import shutil
 
     from fluid_adapter.openfoam import build_openfoam_participant
-
-    from ..case.timing import case_schedule
+    from fsi_orchestrator.case.timing import case_schedule
 
     def factory(case: Case, solid):
         if fresh and workdir.exists():

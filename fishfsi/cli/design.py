@@ -22,7 +22,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..case import CaseError
+from fsi_orchestrator.case import CaseError
+
 from ..design.evaluate import (
     Design,
     EvaluationSpec,
