@@ -23,6 +23,7 @@ import pytest
 from fishfsi.cli import run as run_cli
 from fishfsi.cli import sweep as sweep_cli
 from fishfsi.cli.common import EXIT_FAILED, EXIT_INTERRUPTED
+from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
 
 ROOT = Path(__file__).resolve().parents[1]
 BEAM = ROOT / "cases/beam_in_liquid"
@@ -114,6 +115,27 @@ def test_a_resume_of_another_case_is_refused_naming_what_changed(tmp_path, monke
     assert "\n" not in err
     assert err.startswith(f"error: --resume: {out} holds a sweep of another case")
     assert "fluid.damping_ratio: 0.05 -> 0.1" in err
+
+
+def test_a_resume_into_a_folder_of_another_version_is_refused_naming_it(
+    tmp_path, monkeypatch, capsys
+):
+    """A sweep folder written by another version of fishfsi: --resume does not mix its rows
+    with this version's, in one line naming the version."""
+    import fsi_orchestrator
+
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "5", "--waveforms", "sine"]
+    args += ["--output", str(out), "--quiet"]
+    assert sweep_cli.main(args) == 0
+    capsys.readouterr()
+    old = fsi_orchestrator.__version__
+    monkeypatch.setattr(fsi_orchestrator, "__version__", f"{old}.post1")
+    assert sweep_cli.main([*args, "--resume"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith(f"error: --resume: {out} holds a sweep of another case")
+    assert f"version: '{old}' -> '{old}.post1'" in err
 
 
 def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None = None):
@@ -386,6 +408,86 @@ def test_a_sweep_killed_by_sigkill_keeps_its_rows_and_resumes(tmp_path):
     rows = table(out)
     assert points(rows) == [("sine", 2.0), ("sine", 8.0), ("sine", 20.0)]
     assert rows[0] == first[0]
+
+
+# small, well-converged transient points (a tenth of the drive: a few Newton iterations per
+# window), two periods each, a checkpoint every 4 of their 16 windows
+RESUME_RUN = [
+    *BEAM_SET,
+    *("--set", "fluid.model=potential", "--set", "time.periods=2"),
+    *("--set", "time.steps_per_period=8", "--set", "output.checkpoint_every=4"),
+    *("--set", "actuation.left_volts=[-50,150]", "--set", "actuation.right_volts=[-50,150]"),
+    *("--method", "transient", "--frequencies", "2,3", "--waveforms", "sine", "--quiet"),
+]
+
+
+def assert_rows_match(got: list[dict], want: list[dict], rel: float = 1e-6) -> float:
+    """Every column of every row: text equal, numbers to ``rel`` (absolute where the value
+    is ~0, NaN where the other is NaN); returns the largest relative difference seen."""
+    assert [list(r) for r in got] == [list(r) for r in want]
+    worst = 0.0
+    for a, b in zip(got, want, strict=True):
+        for key, value in b.items():
+            try:
+                x, y = float(a[key]), float(value)
+            except ValueError:  # waveform, thrust_source, status
+                assert a[key] == value, key
+                continue
+            if np.isnan(y) or np.isinf(y):
+                assert str(x) == str(y), (key, a[key], value)
+                continue
+            scale = max(abs(y), 1e-12)
+            worst = max(worst, abs(x - y) / scale)
+            assert abs(x - y) <= rel * scale, (a["frequency_hz"], key, a[key], value)
+    return worst
+
+
+@pytest.mark.slow
+def test_a_killed_and_resumed_transient_sweep_gives_the_uninterrupted_rows(
+    tmp_path, capsys, monkeypatch
+):
+    """Issue 27's target: a sweep killed mid-way (SIGKILL after its first row, in its second
+    point between two checkpoints) and resumed gives the uninterrupted sweep's rows to 1e-6.
+    The resume covers both paths: the finished point is skipped, the killed one continues
+    from its checkpoint (window 4..15 of 16). About 40 s on one core."""
+    whole = tmp_path / "whole"
+    assert sweep_cli.main([str(BEAM), *RESUME_RUN, "--output", str(whole)]) == 0
+    capsys.readouterr()
+
+    out = tmp_path / "killed"
+    cmd = [FSI_SWEEP, str(BEAM), *RESUME_RUN, "--output", str(out)]
+    log = open(tmp_path / "killed.log", "w")
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
+    checkpoint = out / "sine_3Hz" / CHECKPOINT_FILE
+    deadline = time.monotonic() + 300
+    while not ((out / "sweep.csv").is_file() and checkpoint.is_file()):
+        assert proc.poll() is None, (tmp_path / "killed.log").read_text()
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    log.close()
+    assert points(table(out)) == [("sine", 2.0)]
+    killed_at = int(read_checkpoint(checkpoint)[0]["window"])
+    assert 4 <= killed_at < 16  # the second point was killed between its checkpoints
+
+    from fsi_orchestrator.loop import WindowLoop
+
+    solve, solved = WindowLoop._solve_window, []
+
+    def counted(loop):
+        solved.append(loop.window)
+        return solve(loop)
+
+    monkeypatch.setattr(WindowLoop, "_solve_window", counted)
+    assert sweep_cli.main([str(BEAM), *RESUME_RUN, "--output", str(out), "--resume"]) == 0
+    assert "afresh" not in capsys.readouterr().err
+    assert solved == list(range(killed_at, 16))  # 2 Hz skipped, 3 Hz from its checkpoint
+
+    got, want = table(out), table(whole)
+    assert points(want) == [("sine", 2.0), ("sine", 3.0)]
+    worst = assert_rows_match(got, want)
+    print(f"killed at window {killed_at}/16; largest relative difference {worst:.2e}")
 
 
 # --- a real one-node SLURM (docs: /work/shared/notes/slurm-local.md) ---------------------
