@@ -138,6 +138,29 @@ def test_a_resume_into_a_folder_of_another_version_is_refused_naming_it(
     assert f"version: '{old}' -> '{old}.post1'" in err
 
 
+@pytest.mark.parametrize("held", [["sweep.csv"], ["sweep.json"], ["sweep.csv", "sweep.json"]])
+def test_a_resume_into_tables_without_a_sweep_case_is_refused_before_any_point(
+    tmp_path, monkeypatch, capsys, held
+):
+    """A folder with sweep.csv / sweep.json but no sweep_case.json (an older version's, or not
+    fsi-sweep's): --resume cannot tell its rows are this case's, so it is refused in one line
+    naming the folder and the tables, before any point runs or anything there is written."""
+    out = tmp_path / "old"
+    out.mkdir()
+    for name in held:
+        (out / name).write_text("waveform,frequency_hz\nsine,5\n")
+    ran = linear_frequencies_run(monkeypatch)
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "5", "--waveforms", "sine"]
+    assert sweep_cli.main([*args, "--output", str(out), "--resume", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err
+    assert err.startswith(f"error: --resume: {out} holds {' and '.join(held)} but no ")
+    assert "sweep_case.json" in err and "another --output" in err and "remove" in err
+    assert ran == []
+    assert sorted(p.name for p in out.iterdir()) == sorted(held)  # nothing written there
+    assert all((out / n).read_text() == "waveform,frequency_hz\nsine,5\n" for n in held)
+
+
 def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None = None):
     """run_dynamic stubbed: records (point folder name, resume), writes a checkpoint into the
     point's folder first (as a real run does every few windows), then raises ``fail[f]``."""

@@ -492,14 +492,25 @@ class SweepTable:
 
     def prepare(self, names: Sequence[str], resume: bool) -> set[str]:
         """On one rank, before any point runs: the names of the points already done
-        (``resume``), else none (and the rows a previous sweep left for these points go)."""
+        (``resume``), else none (and the rows a previous sweep left for these points go).
+        A ``resume`` into a folder whose tables have no ``sweep_case.json`` is refused before
+        anything there is written: its rows cannot be told to be this case's."""
+        case_file = self.output / SWEEP_CASE_FILE
+        if resume and not case_file.is_file():
+            tables = [n for n in ("sweep.csv", "sweep.json") if (self.output / n).is_file()]
+            if tables:
+                held, them = " and ".join(tables), "them" if len(tables) > 1 else "it"
+                raise CaseError(
+                    f"--resume: {self.output} holds {held} but no {SWEEP_CASE_FILE} (made by "
+                    f"an older version or not by fsi-sweep); sweep into another --output, or "
+                    f"remove {them} to start afresh"
+                )
         try:
             self.rows_dir.mkdir(parents=True, exist_ok=True)
         except OSError as err:
             raise CaseError(
                 f"--output {self.output}: cannot write there ({err.strerror})"
             ) from None
-        case_file = self.output / SWEEP_CASE_FILE
         done: set[str] = set()
         if resume:
             if case_file.is_file():
