@@ -412,6 +412,14 @@ def execute(
         return modal_summary(case, RunProgress(enabled=show_progress))
     if kind is AnalysisKind.STATIC:
         return static_summary(case)
+    if kind is AnalysisKind.SWIMMING and case.fluid.model is FluidModel.OPENFOAM:
+        from .flume import flume_summary
+
+        def say(line: str) -> None:
+            if show_progress:
+                print(line, file=sys.stderr, flush=True)
+
+        return flume_summary(case, output, say)
     if kind is AnalysisKind.SWIMMING:
         return swimming_summary(case)
     replaces = prepare_output(output, resume, overwrite)

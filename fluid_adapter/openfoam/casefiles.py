@@ -32,6 +32,11 @@ class FlowSettings:
     body_patches: tuple[str, ...]
     wall_patches: tuple[str, ...]
     open_patches: tuple[str, ...]  # p = 0 openings
+    # a flume (inflow > 0): uniform inflow along +x through the inlet, p = 0 at the outlet, the
+    # wall and open patches slip (flume_fields)
+    inflow_m_s: float = 0.0
+    inlet_patches: tuple[str, ...] = ()
+    outlet_patches: tuple[str, ...] = ()
     moving: bool = True
     n_outer: int = 2
     max_courant: float = 2.0
@@ -320,9 +325,49 @@ def initial_fields(s: FlowSettings) -> dict[str, dict]:
             {"type": "zeroGradient"},
             {"type": "calculated", "value": 0.0},
         )
+    if s.inflow_m_s > 0:
+        flume_fields(fields, s)
     if s.moving:
         fields[MOTION_FIELD] = point_motion(s)
     return fields
+
+
+INFLOW_TURBULENCE_INTENSITY = 0.01  # a quiet flume
+INFLOW_VISCOSITY_RATIO = 1.0  # nut / nu of the inflow: free-stream turbulence, no more
+
+
+def flume_fields(fields: dict[str, dict], s: FlowSettings) -> None:
+    """Turn the tank's fields into a flume's: uniform U along +x from the inlet, p = 0 at the
+    outlet, the walls and the top slip (no boundary layers of their own to feed the fish's
+    forces). Inflow k from 1 % intensity, omega = k / nut with nut = nu."""
+    u = [s.inflow_m_s, 0.0, 0.0]
+    k = 1.5 * (INFLOW_TURBULENCE_INTENSITY * s.inflow_m_s) ** 2
+    omega = k / (INFLOW_VISCOSITY_RATIO * s.nu_m2_s)
+    inlet: dict[str, dict] = {
+        "U": {"type": "fixedValue", "value": u},
+        "p": {"type": "zeroGradient"},
+        "k": {"type": "fixedValue", "value": k},
+        "omega": {"type": "fixedValue", "value": omega},
+    }
+    outlet: dict[str, dict] = {
+        "U": {"type": "inletOutlet", "inletValue": [0.0, 0.0, 0.0], "value": u},
+        "p": {"type": "fixedValue", "value": 0.0},
+        "k": {"type": "inletOutlet", "inletValue": k, "value": k},
+        "omega": {"type": "inletOutlet", "inletValue": omega, "value": omega},
+    }
+    start: dict[str, object] = {"U": u, "k": k, "omega": omega}
+    for name, field in fields.items():
+        boundary = field["boundaryField"]
+        still = {"type": "slip"} if name == "U" else {"type": "zeroGradient"}
+        for patch in (*s.wall_patches, *s.open_patches):
+            boundary[patch] = dict(still)
+        calculated: dict = {"type": "calculated", "value": 0.0}
+        for patch in s.inlet_patches:
+            boundary[patch] = dict(inlet.get(name, calculated))
+        for patch in s.outlet_patches:
+            boundary[patch] = dict(outlet.get(name, calculated))
+        if name in start:
+            field["internalField"] = start[name]
 
 
 def _field(cls, dims, value, s: FlowSettings, body: dict, wall: dict, opening: dict) -> dict:
@@ -350,7 +395,8 @@ BODY_MOTION_BC = {
 
 def point_motion(s: FlowSettings) -> dict:
     fixed = {"type": "fixedValue", "value": [0.0, 0.0, 0.0]}
-    boundary = {name: dict(fixed) for name in (*s.wall_patches, *s.open_patches)}
+    still = (*s.wall_patches, *s.open_patches, *s.inlet_patches, *s.outlet_patches)
+    boundary = {name: dict(fixed) for name in still}
     boundary.update({name: dict(BODY_MOTION_BC) for name in s.body_patches})
     return {
         "FoamFile": {"class": "pointVectorField"},

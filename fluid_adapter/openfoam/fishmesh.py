@@ -38,6 +38,8 @@ PATCH_MINUS_Z = "fishMinusZ"
 FISH_PATCHES = (PATCH_PLUS_Z, PATCH_MINUS_Z)
 WALLS = "walls"
 TOP = "top"
+INLET = "inlet"  # a flume's front wall (fluid.inflow_m_s > 0)
+OUTLET = "outlet"  # a flume's back wall
 _CURVE_POINTS = 40  # polyLine points per curved block edge
 
 
@@ -82,6 +84,7 @@ class TankGeometry:
     length: float  # plate length L
     plate_breaks: tuple[float, ...]  # 0 = x_0 < ... < x_n = L, block boundaries along the plate
     height: Callable[[NDArray], NDArray]  # plate height h(x), |y| <= h/2
+    flume: bool = False  # front wall an inlet, back wall an outlet
 
     def h(self, x: float) -> float:
         return float(self.height(np.array([min(max(x, 0.0), self.length)]))[0])
@@ -100,6 +103,7 @@ def tank_geometry(case: Case) -> TankGeometry:
         length=length,
         plate_breaks=plate.kinks_m,
         height=plate.height,
+        flume=fl.inflow_m_s > 0,
     )
 
 
@@ -198,9 +202,12 @@ def tank_topology(geo: TankGeometry, res: Resolution) -> BlockTopology:
     )
     blocks: list[Block] = []
     patches: dict[str, tuple[str, list[tuple[int, int, int, int]]]] = {
-        WALLS: ("wall", []),
+        # a flume's walls slip: no wall for the turbulence model's wall distance
+        WALLS: ("patch" if geo.flume else "wall", []),
         TOP: ("patch", []),
     }
+    if geo.flume:
+        patches.update({INLET: ("patch", []), OUTLET: ("patch", [])})
     for k in range(nz - 1):
         for j in range(ny - 1):
             for i in range(nx - 1):
@@ -238,10 +245,11 @@ def _add_wall_faces(patches, corners, i, j, k, nx, ny, nz) -> None:
         return (a, b, c, d)
 
     walls, top = patches[WALLS][1], patches[TOP][1]
+    front, back = (patches[INLET][1], patches[OUTLET][1]) if INLET in patches else (walls, walls)
     if i == 0:
-        walls.append(face("x0"))
+        front.append(face("x0"))
     if i == nx - 2:
-        walls.append(face("x1"))
+        back.append(face("x1"))
     if j == 0:
         walls.append(face("y0"))
     if j == ny - 2:

@@ -32,6 +32,16 @@ LARGEST_TAIL_AMPLITUDE_M = 0.040  # issue 4: the seed's largest tail motion, abo
 
 # the unit mode shape on points: (n, 2|3) -> (n, 3), tail tip z = 1
 ShapeOnPoints = Callable[[NDArray], NDArray]
+# a periodic motion's harmonics on points: (n, 2|3) -> [(k, complex (n, 3))], u = sum Im(X_k e^ikwt)
+HarmonicsOnPoints = Callable[[NDArray], list[tuple[int, NDArray]]]
+
+
+def start_ramp(t: float, ramp_periods: float, frequency_hz: float) -> float:
+    """(1 - cos) / 2 from 0 to 1 over ``ramp_periods`` periods, then 1."""
+    t_ramp = ramp_periods / frequency_hz
+    if t >= t_ramp:
+        return 1.0
+    return 0.5 * (1 - np.cos(np.pi * t / t_ramp))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -46,14 +56,26 @@ class ModeMotion:
     ramp_periods: float = 0.0
 
     def ramp(self, t: float) -> float:
-        t_ramp = self.ramp_periods / self.frequency_hz
-        if t >= t_ramp:
-            return 1.0
-        return 0.5 * (1 - np.cos(np.pi * t / t_ramp))
+        return start_ramp(t, self.ramp_periods, self.frequency_hz)
 
     def displacement(self, t: float) -> NDArray:
         s = np.sin(2 * np.pi * self.frequency_hz * t)
         return self.amplitude_m * self.ramp(t) * s * self.shape
+
+
+@dataclass(frozen=True, kw_only=True)
+class PeriodicMotion:
+    """u(x, t) = ramp(t) * sum_k Im(X_k(x) e^(i k w t)): a periodic response (a linear
+    analysis's harmonics) on a fixed set of points, started with ModeMotion's ramp."""
+
+    harmonics: list[tuple[int, NDArray]]  # (k, complex (n, 3))
+    frequency_hz: float
+    ramp_periods: float = 0.0
+
+    def displacement(self, t: float) -> NDArray:
+        omega = 2 * np.pi * self.frequency_hz
+        u = sum(np.imag(X * np.exp(1j * k * omega * t)) for k, X in self.harmonics)
+        return start_ramp(t, self.ramp_periods, self.frequency_hz) * np.asarray(u)
 
 
 def mode_motion(
@@ -124,11 +146,62 @@ def run_prescribed(
 ) -> PrescribedResult:
     """One-way run: the fish moves in ``shape``, one pimpleFoam launch."""
     f = frequency_hz or case.actuation.frequency_hz
-    dt, n = 1.0 / (f * steps_per_period), round(periods * steps_per_period)
+    return _run_motion(
+        case,
+        workdir,
+        lambda points: mode_motion(shape, points, amplitude_m, f, ramp_periods).displacement,
+        f,
+        periods,
+        steps_per_period,
+        mesh_scale,
+        write_every,
+    )
+
+
+def run_periodic(
+    case: Case,
+    workdir: Path,
+    harmonics: HarmonicsOnPoints,
+    *,
+    periods: float = 2.0,
+    steps_per_period: int = 40,
+    mesh_scale: float = 1.0,
+    ramp_periods: float = 0.5,
+    write_every: int | None = None,
+) -> PrescribedResult:
+    """One-way run: the fish moves in a periodic response at the case's drive frequency."""
+    f = case.actuation.frequency_hz
+    return _run_motion(
+        case,
+        workdir,
+        lambda points: (
+            PeriodicMotion(
+                harmonics=harmonics(points), frequency_hz=f, ramp_periods=ramp_periods
+            ).displacement
+        ),
+        f,
+        periods,
+        steps_per_period,
+        mesh_scale,
+        write_every,
+    )
+
+
+def _run_motion(
+    case: Case,
+    workdir: Path,
+    motion_on: Callable[[NDArray], Callable[[float], NDArray]],
+    frequency_hz: float,
+    periods: float,
+    steps_per_period: int,
+    mesh_scale: float,
+    write_every: int | None,
+) -> PrescribedResult:
+    dt, n = 1.0 / (frequency_hz * steps_per_period), round(periods * steps_per_period)
     start = time.perf_counter()
     run, quality = _prepare(case, workdir, dt, mesh_scale)
-    motion = mode_motion(shape, run.interface.points0, amplitude_m, f, ramp_periods)
-    history = run_batch(run, motion.displacement, dt, n, write_every=write_every)
+    displacement = motion_on(run.interface.points0)
+    history = run_batch(run, displacement, dt, n, write_every=write_every)
     return PrescribedResult(
         times_s=np.array([h.time for h in history]),
         force_n=np.array([h.force for h in history]),

@@ -26,7 +26,9 @@ from .casefiles import (
 from .checkmesh import MeshQuality, check_mesh
 from .fishmesh import (
     FISH_PATCHES,
+    INLET,
     LEVELS,
+    OUTLET,
     TOP,
     WALLS,
     create_baffles_dict,
@@ -47,6 +49,7 @@ class GeneratedCase:
 
 def flow_settings(case: Case) -> FlowSettings:
     fl = case.fluid
+    flume = fl.inflow_m_s > 0
     return FlowSettings(
         nu_m2_s=fl.kinematic_viscosity_m2_s,
         rho_kg_m3=fl.density_kg_m3,
@@ -55,6 +58,9 @@ def flow_settings(case: Case) -> FlowSettings:
         body_patches=FISH_PATCHES,
         wall_patches=(WALLS,),
         open_patches=(TOP,),
+        inflow_m_s=fl.inflow_m_s,
+        inlet_patches=(INLET,) if flume else (),
+        outlet_patches=(OUTLET,) if flume else (),
         max_courant=fl.max_courant,
     )
 

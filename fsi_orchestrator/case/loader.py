@@ -203,6 +203,17 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 f'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
                 f'held nowhere), got "{case.boundary.head.value}"'
             )
+        speed = case.swimming.speed_m_s
+        if case.fluid.model.value == "openfoam" and (speed is None or speed <= 0):
+            raise CaseError(
+                'swimming.speed_m_s: a swimming case with fluid.model = "openfoam" is a flume '
+                "and needs its inflow speed > 0 (e.g. --set swimming.speed_m_s=0.8)"
+            )
+    if case.fluid.inflow_m_s > 0 and case.fluid.model.value != "openfoam":
+        raise CaseError(
+            f"fluid.inflow_m_s = {case.fluid.inflow_m_s:g}: a flume's inflow needs "
+            'fluid.model = "openfoam" (the fast models take the speed from swimming.speed_m_s)'
+        )
     t = case.time
     if (t.step_s is None) != (t.end_time_s is None):
         raise CaseError("time.step_s and time.end_time_s go together: give both or neither")

@@ -584,6 +584,15 @@ class Fluid:
         gt=0,
         le=2,
     )
+    inflow_m_s: float = param(
+        0.0,
+        "openfoam: a flume: uniform inflow along +x (nose to tail) through the tank's front "
+        "wall, an outlet at its back wall, the other walls and the top slip. 0: the closed "
+        "tank (docs/swimming.md).",
+        unit="m/s",
+        ge=0,
+        le=5,
+    )
     damping_ratio: float = param(
         0.0,
         "potential, transient: modal damping ratio at the first "
