@@ -155,10 +155,165 @@ def test_a_resume_into_tables_without_a_sweep_case_is_refused_before_any_point(
     err = capsys.readouterr().err.strip()
     assert "\n" not in err
     assert err.startswith(f"error: --resume: {out} holds {' and '.join(held)} but no ")
-    assert "sweep_case.json" in err and "another --output" in err and "remove" in err
+    assert "sweep_case.json" in err and "another --output" in err and "--overwrite" in err
     assert ran == []
     assert sorted(p.name for p in out.iterdir()) == sorted(held)  # nothing written there
     assert all((out / n).read_text() == "waveform,frequency_hz\nsine,5\n" for n in held)
+
+
+def stub_linear(monkeypatch) -> list[list[str]]:
+    """linear_sweep stubbed (no solver): each call's points run, in order; a point's row
+    holds its call's number (``tip_amplitude_m`` = call, in mm)."""
+    calls: list[list[str]] = []
+
+    def stub(case, frequencies, waveforms, done=frozenset(), on_row=None):
+        calls.append([])
+        jobs = [(w, f) for w in waveforms for f in frequencies]
+        for w, f in jobs:
+            name = sweep_cli.point_name(w, f)
+            if name in done:
+                continue
+            calls[-1].append(name)
+            row = {"waveform": w.value, "frequency_hz": f, "tip_amplitude_m": 1e-3 * len(calls)}
+            row.update(slender_body_mean_thrust_n=0.0, status="ok")
+            if on_row is not None:
+                on_row(name, row, 0.0)
+        return []
+
+    monkeypatch.setattr(sweep_cli, "linear_sweep", stub)
+    return calls
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(folder)): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != ".sweep.lock"
+    }
+
+
+def test_a_fresh_sweep_into_a_folder_holding_a_sweep_is_refused_and_overwrite_replaces_it(
+    tmp_path, monkeypatch, capsys
+):
+    """Nothing computed is lost: a fresh sweep (no --resume) into a folder holding a sweep's
+    tables is refused in one line naming the folder and what it holds, before any point runs
+    or anything there is written (exit 2); of another case, it names what changed; with
+    --overwrite the earlier tables and rows are replaced by the new sweep's."""
+    calls = stub_linear(monkeypatch)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--waveforms", "sine", "--output", str(out), "--quiet"]
+    assert sweep_cli.main([*args, "--frequencies", "2,5"]) == 0
+    before = snapshot(out)
+    capsys.readouterr()
+
+    assert sweep_cli.main([*args, "--frequencies", "2,5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"error: --output {out}: holds an earlier sweep (sweep.csv, sweep.json, 2 rows in "
+        "sweep_rows/); continue it with --resume, write elsewhere with --output, or replace it "
+        "with --overwrite"
+    )
+    assert sweep_cli.main([*args, "--frequencies", "8", "--set", "fluid.damping_ratio=0.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--resume" not in err  # another case's rows cannot be continued
+    assert err.startswith(f"error: --output {out}: holds a sweep of another case (")
+    assert "fluid.damping_ratio: 0.05 -> 0.1; sweep.csv, sweep.json" in err
+    assert err.endswith("write elsewhere with --output, or replace it with --overwrite")
+    assert calls == [["sine_2Hz", "sine_5Hz"]]  # no point ran
+    assert snapshot(out) == before  # the folder untouched
+
+    assert sweep_cli.main([*args, "--frequencies", "8", "--overwrite"]) == 0
+    assert calls[-1] == ["sine_8Hz"]
+    assert [(r["frequency_hz"], r["tip_amplitude_m"]) for r in table(out)] == [("8.0", "0.002")]
+    assert sorted(p.name for p in (out / "sweep_rows").iterdir()) == ["sine_8Hz.json"]
+
+
+def test_an_array_task_is_refused_only_by_its_own_result_or_another_case(
+    tmp_path, monkeypatch, capsys
+):
+    """--point K (a SLURM array task; the tasks write into one folder, at once or one after
+    another) runs beside its siblings' rows and runs, but is refused (exit 2, nothing run or
+    written) where its own row or run is there already (--resume continues it, --overwrite
+    replaces that row alone) or the folder holds a sweep of another case."""
+    calls = stub_linear(monkeypatch)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,5", "--waveforms", "sine"]
+    args += ["--output", str(out), "--quiet"]
+    assert sweep_cli.main([*args, "--point", "0"]) == 0
+    assert sweep_cli.main([*args, "--point", "1"]) == 0  # its sibling's row is there
+    assert calls == [["sine_2Hz"], ["sine_5Hz"]]
+    assert points(table(out)) == [("sine", 2.0), ("sine", 5.0)]
+    before = snapshot(out)
+    capsys.readouterr()
+
+    assert sweep_cli.main([*args, "--point", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"error: --output {out}: holds point 1's earlier result (sweep_rows/sine_5Hz.json); "
+        "continue it with --resume, write elsewhere with --output, or replace it with "
+        "--overwrite"
+    )
+    assert sweep_cli.main([*args, "--point", "0", "--set", "fluid.damping_ratio=0.1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: --output {out}: holds a sweep of another case (fluid.")
+    assert sweep_cli.main([*args, "--point", "1", "--resume"]) == 0  # done: nothing runs
+    assert calls[2:] == [[]]
+    assert snapshot(out) == before
+
+    assert sweep_cli.main([*args, "--point", "1", "--overwrite"]) == 0
+    assert calls[-1] == ["sine_5Hz"]
+    rows = table(out)
+    assert [(r["frequency_hz"], r["tip_amplitude_m"]) for r in rows] == [
+        ("2.0", "0.001"),  # the sibling's row stays
+        ("5.0", "0.004"),
+    ]
+
+    # a transient task killed in its point (a checkpoint, no row): its run counts, not a
+    # sibling's
+    calls_t: list = []
+    stub_runs(monkeypatch, calls_t, {3.0: KeyboardInterrupt()})
+    transient = [str(BEAM), *BEAM_SET, "--frequencies", "1,3", "--waveforms", "sine"]
+    transient += ["--method", "transient", "--output", str(tmp_path / "t"), "--quiet"]
+    assert sweep_cli.main([*transient, "--point", "1"]) == EXIT_INTERRUPTED
+    capsys.readouterr()
+    assert sweep_cli.main([*transient, "--point", "1"]) == 2
+    assert "holds point 1's earlier result (sine_3Hz/); continue it with --resume" in (
+        capsys.readouterr().err
+    )
+    assert sweep_cli.main([*transient, "--point", "0"]) == 0
+    assert sweep_cli.main([*transient]) == 2  # the whole sweep: its row and the killed run
+    assert "(sweep.csv, sweep.json, 1 row in sweep_rows/, sine_1Hz/ and 1 more point runs)" in (
+        capsys.readouterr().err
+    )
+    assert calls_t == [("sine_3Hz", False), ("sine_1Hz", False)]
+
+
+def test_a_refusal_under_mpi_stops_every_rank(tmp_path, monkeypatch, capsys):
+    """Rank 0 checks the folder; its refusal reaches the other ranks (no rank left waiting
+    for the points): rank 0 says it in one line, the others exit 2 without a word."""
+    stub_linear(monkeypatch)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2", "--waveforms", "sine"]
+    args += ["--output", str(out), "--quiet"]
+    assert sweep_cli.main(args) == 0
+    capsys.readouterr()
+    sent: list = []
+
+    def world(rank: int) -> types.SimpleNamespace:
+        def bcast(value, root):
+            sent.append(value)
+            return value if rank == 0 else sent[0]
+
+        return types.SimpleNamespace(Get_rank=lambda: rank, Get_size=lambda: 2, bcast=bcast)
+
+    monkeypatch.setattr(sweep_cli, "mpi_world", lambda: world(0))
+    assert sweep_cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: --output {out}: holds an earlier sweep") and "\n" not in err
+    monkeypatch.setattr(sweep_cli, "mpi_world", lambda: world(1))
+    assert sweep_cli.main(args) == 2
+    assert capsys.readouterr().err == ""
+    assert sent[0][0] is None and sent[0][1] == err.removeprefix("error: ")
 
 
 def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None = None):
@@ -213,8 +368,10 @@ def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
     calls.clear()  # all done: nothing runs
     assert sweep_cli.main([*args, "--resume"]) == 0
     assert calls == []
-    calls.clear()  # without --resume: everything runs again, fresh
-    assert sweep_cli.main(args) == 0
+    calls.clear()  # without --resume the folder is refused; --overwrite runs everything afresh
+    assert sweep_cli.main(args) == 2
+    assert calls == []
+    assert sweep_cli.main([*args, "--overwrite"]) == 0
     assert calls == [(f"sine_{f}Hz", False) for f in (2, 4, 6, 8)]
 
 

@@ -15,6 +15,9 @@ finished row of that case in the folder: also an earlier sweep's other frequenci
 array tasks' points). ``--resume`` skips
 the points whose rows are done for the same case (``OUTPUT/sweep_case.json``) and continues a
 killed transient point from its checkpoint (its run folder is ``OUTPUT/<waveform>_<f>Hz``).
+Without ``--resume`` a folder holding a sweep's results is refused (``--overwrite`` replaces
+them); ``--point K`` (an array task) is refused only by another case's sweep there or by its
+own point's row or run, not by its siblings' rows.
 One line per finished point goes to stderr (``--quiet``: none).
 """
 
@@ -39,7 +42,16 @@ from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.params import coerce, spec_of
 from fsi_orchestrator.case.schema import Actuation, AnalysisKind, FluidModel, Waveform
 
-from .common import EXIT_FAILED, EXIT_OK, base_parser, emit, load, run_main, to_jsonable
+from .common import (
+    EXIT_BAD_INPUT,
+    EXIT_FAILED,
+    EXIT_OK,
+    base_parser,
+    emit,
+    load,
+    run_main,
+    to_jsonable,
+)
 from .compose import shell_with_fast_fluid, without_cfd
 from .swimming import SWIMMING_KEYS
 
@@ -490,11 +502,21 @@ class SweepTable:
         order = [w.value for w in waveforms] + [w.value for w in Waveform]
         self._sort = lambda row: (order.index(row["waveform"]), row["frequency_hz"])
 
-    def prepare(self, names: Sequence[str], resume: bool) -> set[str]:
+    def prepare(
+        self,
+        names: Sequence[str],
+        resume: bool,
+        overwrite: bool = False,
+        point: int | None = None,
+    ) -> set[str]:
         """On one rank, before any point runs: the names of the points already done
-        (``resume``), else none (and the rows a previous sweep left for these points go).
-        A ``resume`` into a folder whose tables have no ``sweep_case.json`` is refused before
-        anything there is written: its rows cannot be told to be this case's."""
+        (``resume``), else none. Nothing computed is lost: a fresh sweep into a folder holding
+        a sweep's results (tables, rows, point runs) is refused unless ``overwrite`` replaces
+        them; a ``point`` (an array task: its siblings write their rows into the same folder)
+        is refused only where the folder's sweep is another case's (or of unknown case) or
+        that point's own row or run is there. A ``resume`` into a folder whose tables have no
+        ``sweep_case.json`` is refused: its rows cannot be told to be this case's. Each
+        refusal comes before anything there is written."""
         case_file = self.output / SWEEP_CASE_FILE
         if resume and not case_file.is_file():
             tables = [n for n in ("sweep.csv", "sweep.json") if (self.output / n).is_file()]
@@ -503,8 +525,10 @@ class SweepTable:
                 raise CaseError(
                     f"--resume: {self.output} holds {held} but no {SWEEP_CASE_FILE} (made by "
                     f"an older version or not by fsi-sweep); sweep into another --output, or "
-                    f"remove {them} to start afresh"
+                    f"replace {them} with --overwrite"
                 )
+        if not resume and not overwrite:
+            self._refuse_to_replace(names, point)
         try:
             self.rows_dir.mkdir(parents=True, exist_ok=True)
         except OSError as err:
@@ -514,27 +538,93 @@ class SweepTable:
         done: set[str] = set()
         if resume:
             if case_file.is_file():
-                try:
-                    old = json.loads(case_file.read_text())
-                except (OSError, ValueError):
-                    old = None
-                if old != self.identity:
-                    what = (
-                        identity_changes(old, self.identity)
-                        if isinstance(old, dict)
-                        else (f"{case_file} is unreadable")
-                    )
+                changes = self._changes()
+                if changes is not None:
                     raise CaseError(
-                        f"--resume: {self.output} holds a sweep of another case ({what}); "
-                        "sweep into another --output, or drop --resume to start afresh"
+                        f"--resume: {self.output} holds a sweep of another case ({changes}); "
+                        "sweep into another --output, or replace it with --overwrite"
                     )
             finished = self.rows()
             done = {n for n in names if finished.get(n, {}).get("status", "").startswith("ok")}
-        else:
+        elif overwrite and point is None:  # the earlier sweep's tables and rows go
+            for path in [self.output / "sweep.csv", self.output / "sweep.json"]:
+                path.unlink(missing_ok=True)
+            for path in self.rows_dir.glob("*.json"):
+                path.unlink(missing_ok=True)
+        else:  # this point's own row only: the sibling tasks' rows stay
             for name in names:
                 (self.rows_dir / f"{name}.json").unlink(missing_ok=True)
         atomic_write(case_file, json.dumps(self.identity, indent=1))
         return done
+
+    def _changes(self) -> str | None:
+        """How the case in ``sweep_case.json`` differs from this one (None: the same)."""
+        case_file = self.output / SWEEP_CASE_FILE
+        try:
+            old = json.loads(case_file.read_text())
+        except (OSError, ValueError):
+            old = None
+        if old == self.identity:
+            return None
+        if isinstance(old, dict):
+            return identity_changes(old, self.identity)
+        return f"{case_file} is unreadable"
+
+    def held(self, names: Sequence[str] | None = None) -> list[str]:
+        """What of a sweep's results the folder holds: its tables, rows and point runs (with
+        ``names``: only those points' rows and runs)."""
+        from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE
+
+        run_files = (RESULTS_FILE, CHECKPOINT_FILE)
+        if names is None:
+            found = [n for n in ("sweep.csv", "sweep.json") if (self.output / n).is_file()]
+            rows = len(list(self.rows_dir.glob("*.json")))
+            if rows:
+                found.append(f"{rows} row{'s' if rows > 1 else ''} in {ROWS_FOLDER}/")
+            folders = sorted({p for w in Waveform for p in self.output.glob(f"{w.value}_*Hz")})
+        else:
+            found = [
+                f"{ROWS_FOLDER}/{n}.json" for n in names if (self.rows_dir / f"{n}.json").is_file()
+            ]
+            folders = [self.output / n for n in names]
+        runs = [p.name for p in folders if any((p / f).is_file() for f in run_files)]
+        if runs:
+            more = len(runs) - 1
+            found.append(f"{runs[0]}/" + (f" and {more} more point runs" if more else ""))
+        return found
+
+    def _refuse_to_replace(self, names: Sequence[str], point: int | None) -> None:
+        """A fresh sweep (no --resume, no --overwrite) stops here in one line where it would
+        replace a sweep's results; see prepare."""
+        where = f"--output {self.output}"
+        recorded = (self.output / SWEEP_CASE_FILE).is_file()
+        changes = self._changes() if recorded else None
+        held = self.held()
+        if recorded and changes is not None and (held or point is not None):
+            what = f"{changes}; {', '.join(held)}" if held else changes
+            raise CaseError(
+                f"{where}: holds a sweep of another case ({what}); write elsewhere with "
+                "--output, or replace it with --overwrite"
+            )
+        if not recorded and held:
+            raise CaseError(
+                f"{where}: holds an earlier sweep ({', '.join(held)}) but no {SWEEP_CASE_FILE} "
+                "(made by an older version or not by fsi-sweep); write elsewhere with --output, "
+                "or replace it with --overwrite"
+            )
+        if point is not None:  # the siblings' rows are theirs: only this point's own counts
+            own = self.held(names)
+            if own:
+                raise CaseError(
+                    f"{where}: holds point {point}'s earlier result ({', '.join(own)}); "
+                    "continue it with --resume, write elsewhere with --output, or replace it "
+                    "with --overwrite"
+                )
+        elif held:
+            raise CaseError(
+                f"{where}: holds an earlier sweep ({', '.join(held)}); continue it with "
+                "--resume, write elsewhere with --output, or replace it with --overwrite"
+            )
 
     def rows(self) -> dict[str, dict]:
         """This case's finished rows on disk, by point name."""
@@ -630,9 +720,21 @@ def _sweep(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     points = [point_name(w, f) for w in waveforms for f in frequencies]
     table = SweepTable(output, sweep_identity(case, args.method), waveforms)
-    done = table.prepare(points, args.resume) if rank == 0 else None
-    if comm is not None:  # every rank deals the same points
-        done = comm.bcast(done, root=0)
+    outcome: tuple[set[str] | None, str | None] = (None, None)
+    if rank == 0:
+        try:
+            outcome = (table.prepare(points, args.resume, args.overwrite, args.point), None)
+        except CaseError as err:
+            if comm is None:
+                raise
+            outcome = (None, str(err))
+    if comm is not None:  # every rank deals the same points, or stops with rank 0
+        outcome = comm.bcast(outcome, root=0)
+    done, refused = outcome
+    if refused is not None:  # rank 0 says why, in one line
+        if rank == 0:
+            raise CaseError(refused)
+        return EXIT_BAD_INPUT
     assert done is not None  # rank 0's (without MPI the only rank)
 
     def say(line: str, always: bool = False) -> None:
@@ -716,11 +818,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="run only the K-th point (0-based, waveforms then frequencies): one SLURM array "
         "task's share (scripts/slurm_array.sh); the rows merge in --output",
     )
-    parser.add_argument(
+    earlier = parser.add_mutually_exclusive_group()
+    earlier.add_argument(
         "--resume",
         action="store_true",
         help="skip the points whose rows are done in --output (same case) and run the rest; a "
         "killed transient point continues from its checkpoint",
+    )
+    earlier.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the sweep an existing --output holds (its sweep.csv, sweep.json and "
+        "rows; with --point only that point's row); without it such a folder is refused",
     )
     parser.add_argument("--quiet", action="store_true", help="no line per finished point")
     return run_main(_body, parser, argv)
