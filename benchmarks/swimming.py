@@ -15,8 +15,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fishfsi.cli.sweep import linear_sweep, parse_frequencies  # noqa: E402
-from fishfsi.cli.swimming import MEASURED, swimming_summary  # noqa: E402
+from fishfsi.cli.linear import linear_sweep, swimming_summary  # noqa: E402
+from fishfsi.cli.sweep import parse_frequencies  # noqa: E402
+from fishfsi.cli.swimming import MEASURED  # noqa: E402
 from fsi_orchestrator.case import load_case  # noqa: E402
 from fsi_orchestrator.case.schema import Waveform  # noqa: E402
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from fishfsi.cli import design as design_cli
-from fishfsi.cli.sweep import linear_sweep
+from fishfsi.cli.linear import linear_sweep
 from fishfsi.design.study import parse_constraint
 from fsi_orchestrator.case import load_case
 from fsi_orchestrator.case.schema import Waveform

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from fishfsi.cli import run, sweep
-from fishfsi.cli.swimming import MEASURED, SWIMMING_KEYS, swimming_summary
+from fishfsi.cli.linear import swimming_summary
+from fishfsi.cli.swimming import MEASURED, SWIMMING_KEYS
 from fluid_adapter.swimming import (
     BodyDrag,
     FormDrag,

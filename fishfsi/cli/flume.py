@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case, CaseError
 
-from .compose import shell_with_fast_fluid, without_cfd
+from .compose import without_cfd
+from .linear import linear_model, swimming_summary
 
 FLUME_FILE = "flume.json"
 FORCES_FILE = "flume_forces.csv"
@@ -36,27 +37,13 @@ def free_body_harmonics(case: Case) -> tuple[NDArray, list[tuple[int, NDArray]]]
     """The shell nodes (n, 2) and the harmonics (k, complex (n, 3)) of the nodal translations of
     the fast model's periodic response about the mean-voltage equilibrium at the case's drive
     (as fsi-sweep --method linear computes it, recoil included: the head is free)."""
-    from fluid_adapter.drag import edge_drag
-    from solid_adapter.build import mean_voltage_equilibrium, mean_voltage_modal_sweep, static_loads
-    from solid_adapter.harmonic import damped_sweep_response, sweep_response
-    from solid_adapter.piezo import DriveSignal
     from solid_adapter.shell import NDOF
 
-    from .sweep import MODES
-
-    fast = without_cfd(case)
-    model, _ = shell_with_fast_fluid(fast)
-    drive = DriveSignal.from_case(fast)
-    x_static = mean_voltage_equilibrium(fast, model, drive, static_loads(fast, model))
-    sweep = mean_voltage_modal_sweep(fast, model, drive, x_static, MODES)
-    if fast.fluid.edge_drag:
-        tip = model.mesh.nearest_node(*model.layout.tip_point)
-        drag = edge_drag(model, fast.fluid.density_kg_m3, fast.actuation.frequency_hz)
-        response = damped_sweep_response(sweep, drive, x_static, drag, model, tip * NDOF + 2)
-    else:
-        response = sweep_response(sweep, drive, x_static)
+    linear = linear_model(case)
+    a = case.actuation
+    response = linear.response(a.frequency_hz, a.waveform)
     harmonics = [(k, X.reshape(-1, NDOF)[:, :3]) for k, X in response.harmonics]
-    return model.mesh.nodes.copy(), harmonics
+    return linear.model.mesh.nodes.copy(), harmonics
 
 
 def flume_case(case: Case) -> Case:
@@ -83,7 +70,6 @@ def flume_summary(case: Case, output: Path, say=print) -> dict:
     from fluid_adapter.openfoam.prescribed import run_periodic
 
     from .prescribed import mode_on_points
-    from .swimming import swimming_summary
 
     start = time.perf_counter()
     flume = flume_case(case)

@@ -29,10 +29,10 @@ from .compose import (
     openfoam_fluid_factory,
     shell_with_fast_fluid,
 )
+from .linear import swimming_summary
 from .modal import modal_summary
 from .outputs import check_finite, label_results, prepare_output
 from .progress import RunProgress, StopRequest
-from .swimming import swimming_summary
 
 
 def schedule_of(case: Case) -> Schedule:

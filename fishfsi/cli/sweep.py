@@ -33,14 +33,14 @@ import json
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.params import coerce, spec_of
-from fsi_orchestrator.case.schema import Actuation, AnalysisKind, FluidModel, Waveform
+from fsi_orchestrator.case.schema import Actuation, FluidModel, Waveform
 
 from .common import (
     EXIT_BAD_INPUT,
@@ -52,11 +52,16 @@ from .common import (
     run_main,
     to_jsonable,
 )
-from .compose import shell_with_fast_fluid, without_cfd
-from .swimming import SWIMMING_KEYS
+from .compose import without_cfd
+from .linear import (
+    OnRow,
+    SweepError,
+    linear_sweep,
+    not_finite_status,
+    point_name,
+    with_drive,
+)
 
-SAMPLES_PER_PERIOD = 64
-MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
 ROWS_FOLDER = "sweep_rows"  # one finished point's row per file
 SWEEP_CASE_FILE = "sweep_case.json"  # what was swept: --resume refuses another case
 # a launcher's task count: Open MPI's mpirun, MPICH/Intel MPI (Hydra, PMI), SLURM's srun step
@@ -68,18 +73,6 @@ PERIODIC_KEYS = (
     "mean_thrust_periodic_n",
     "mean_thrust_periodic_uncertainty_n",
 )
-
-OnRow = Callable[[str, dict, float], None]  # (point name, row, wall seconds)
-
-
-class SweepError(RuntimeError):
-    """A sweep that cannot go on: a launch whose MPI world does not match its tasks, a linear
-    step without a finite answer (one line, non-zero exit)."""
-
-
-def point_name(waveform: Waveform, frequency_hz: float) -> str:
-    """A point's stable name: its run folder and its row file (``sine_3Hz``)."""
-    return f"{waveform.value}_{frequency_hz:g}Hz"
 
 
 def parse_frequencies(text: str) -> list[float]:
@@ -121,130 +114,6 @@ def select_point(
         )
     waveform, frequency = points[index]
     return [frequency], [waveform]
-
-
-def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
-    actuation = dataclasses.replace(case.actuation, frequency_hz=frequency_hz, waveform=waveform)
-    return dataclasses.replace(case, actuation=actuation)
-
-
-def linear_sweep(
-    case: Case,
-    frequencies: list[float],
-    waveforms: list[Waveform],
-    done: frozenset[str] | set[str] = frozenset(),
-    on_row: OnRow | None = None,
-) -> list[dict]:
-    """The rows of the points not ``done`` (point_name), each handed to ``on_row`` as it is
-    finished. A step without a finite answer (a singular or indefinite tangent about the
-    mean-voltage equilibrium) raises SweepError naming the step; a point whose response is
-    not finite is a failed row."""
-    jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
-    if not jobs:
-        return []
-    from fluid_adapter.drag import edge_drag
-    from fluid_adapter.slender_body import mean_thrust_from_shell
-    from solid_adapter.build import (
-        mean_voltage_equilibrium,
-        mean_voltage_modal_sweep,
-        static_loads,
-    )
-    from solid_adapter.harmonic import damped_sweep_response, sweep_response
-    from solid_adapter.piezo import DriveSignal
-
-    model, _ = shell_with_fast_fluid(case)
-    drive0 = DriveSignal.from_case(case)
-    x_static = mean_voltage_equilibrium(case, model, drive0, static_loads(case, model))
-    if not np.all(np.isfinite(x_static)):
-        raise SweepError(
-            "linear sweep, static step: the equilibrium under the mean voltages is not finite"
-        )
-    with np.errstate(divide="ignore", invalid="ignore"):  # checked below, in one line
-        sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES)
-    check_modal_sweep(sweep)
-    midline = _midline(model)
-    xs = model.mesh.nodes[midline, 0]
-    half_height = model.layout.height(xs) / 2
-    tip = model.mesh.nearest_node(*model.layout.tip_point)
-    swim = None
-    if case.analysis.kind is AnalysisKind.SWIMMING:  # speed and turning from each motion
-        from .swimming import swimming_model
-
-        swim = swimming_model(case, model, xs)
-    rows = []
-    for waveform, f in jobs:
-        start = time.perf_counter()
-        drive = DriveSignal.from_case(with_drive(case, f, waveform))
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            if case.fluid.edge_drag:  # the fluid's damping at this drive frequency
-                drag = edge_drag(model, case.fluid.density_kg_m3, f)
-                response = damped_sweep_response(sweep, drive, x_static, drag, model, tip * 5 + 2)
-            else:
-                response = sweep_response(sweep, drive, x_static)
-            times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
-            h = response.dof_history(midline * 5 + 2, times)
-            tip_z = response.dof_history(np.array([tip * 5 + 2]), times)[:, 0]
-            thrust = mean_thrust_from_shell(
-                xs,
-                half_height,
-                times,
-                h,
-                density_kg_m3=case.fluid.density_kg_m3,
-                period_s=1.0 / f,
-                added_mass_coefficient=case.fluid.added_mass_coefficient,
-            )
-        row = {
-            "waveform": waveform.value,
-            "frequency_hz": float(f),
-            "tip_amplitude_m": float(np.ptp(tip_z) / 2),
-            "slender_body_mean_thrust_n": float(thrust),
-            "status": "ok",
-        }
-        checked = ["tip_amplitude_m", "slender_body_mean_thrust_n"]
-        if swim is not None and np.all(np.isfinite(h)):
-            row.update(swim.row(times, h, f))
-            checked += SWIMMING_KEYS
-        # the periodic response itself: no start-up to settle
-        row.update(
-            tip_amplitude_periodic_m=row["tip_amplitude_m"],
-            tip_amplitude_periodic_uncertainty_m=0.0,
-            periodic=True,
-        )
-        row["status"] = not_finite_status(row, checked)
-        rows.append(row)
-        if on_row is not None:
-            on_row(point_name(waveform, f), row, time.perf_counter() - start)
-    return rows
-
-
-def check_modal_sweep(sweep) -> None:
-    """The modal superposition needs every wet mode at a positive, finite frequency and a
-    finite static correction: a singular or indefinite tangent (a mechanism, or a plate
-    buckled by the mean voltages) has none."""
-    omegas = np.asarray(sweep.omegas)
-    bad = np.flatnonzero(~(np.isfinite(omegas) & (omegas > 0)))
-    if bad.size:
-        j = int(bad[0])
-        raise SweepError(
-            f"linear sweep, modal step: the tangent about the mean-voltage equilibrium is "
-            f"singular or indefinite (wet mode {j + 1} at {omegas[j] / (2 * np.pi):.3g} Hz: a "
-            "mechanism, or a plate buckled by the mean voltages), so the linear response has "
-            "no finite answer; check the case with fsi-modal, or use --method transient"
-        )
-    if not (np.all(np.isfinite(sweep.static)) and np.all(np.isfinite(sweep.zetas))):
-        raise SweepError(
-            "linear sweep, static-correction step: K^-1 F about the mean-voltage equilibrium "
-            "is not finite (a singular tangent); check the case with fsi-modal"
-        )
-
-
-def not_finite_status(row: dict, keys: Sequence[str], step: str = "linear response") -> str:
-    """``row``'s status, or "failed: ..." naming the keys whose values are NaN or infinite:
-    a NaN never passes as a result."""
-    bad = [k for k in keys if k in row and not np.isfinite(row[k])]
-    if not bad or row.get("status", "ok").startswith("failed"):
-        return row.get("status", "ok")
-    return f"failed: {', '.join(bad)} not finite ({step})"
 
 
 def transient_sweep(
@@ -403,12 +272,6 @@ def mpi_world():
             f"folders; {fix}"
         )
     return MPI.COMM_WORLD
-
-
-def _midline(model) -> np.ndarray:
-    nodes = model.mesh.nodes
-    on_axis = np.flatnonzero(np.abs(nodes[:, 1]) < 1e-12 * model.layout.length_m)
-    return on_axis[np.argsort(nodes[on_axis, 0])]
 
 
 def write_tables(rows: list[dict], output: Path) -> None:

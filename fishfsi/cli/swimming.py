@@ -9,7 +9,6 @@ drive's figures; ``fsi-sweep`` adds them to each frequency's row. docs/swimming.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,8 +18,6 @@ from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.planform import resolve_fish
-
-from .compose import without_cfd
 
 if TYPE_CHECKING:
     from fluid_adapter.swimming import BodyDrag, Turning
@@ -166,22 +163,6 @@ def _mass_and_volume(model) -> tuple[float, float, float]:
         float(np.sum(rho * weights * pts[..., 0]) / mass),
         float(np.sum(thickness * weights)),
     )
-
-
-def swimming_summary(case: Case) -> dict:
-    """fsi-run's summary of a swimming case: the figures of the case's own drive."""
-    from .sweep import SweepError, linear_sweep
-
-    start = time.perf_counter()
-    a = case.actuation
-    rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
-    row = rows[0]
-    if row["status"] != "ok":
-        raise SweepError(f"swimming: {row['status']}")
-    summary = {k: row[k] for k in SWIMMING_KEYS}
-    summary.update({k: v for k, v in row.items() if k not in summary and k != "status"})
-    summary["wall_s"] = time.perf_counter() - start
-    return summary
 
 
 # The seed's measured swimming (square wave, -500..+1500 V unless noted); the body length of

@@ -236,13 +236,13 @@ def mesh_name(case: Case) -> str:
 
 
 def _sweep_modes() -> int:
-    from ..cli.sweep import MODES
+    from ..cli.linear import MODES
 
     return MODES
 
 
 def _samples() -> int:
-    from ..cli.sweep import SAMPLES_PER_PERIOD
+    from ..cli.linear import SAMPLES_PER_PERIOD
 
     return SAMPLES_PER_PERIOD
 
@@ -250,7 +250,7 @@ def _samples() -> int:
 def linear_figures(case: Case) -> dict:
     """fsi-sweep --method linear's row at the case's own drive, under fsi-run's keys."""
     from ..cli.compose import without_cfd
-    from ..cli.sweep import linear_sweep
+    from ..cli.linear import linear_sweep
 
     case = without_cfd(case)
     (row,) = linear_sweep(case, [case.actuation.frequency_hz], [case.actuation.waveform])
