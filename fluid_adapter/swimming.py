@@ -128,6 +128,37 @@ def mean_thrust(
     return slender_body_thrust(x, half_height, h, dt_s, speed_m_s=speed_m_s, **fluid).mean_thrust_n
 
 
+def mean_pressure_thrust(
+    x: NDArray,
+    half_height: NDArray,
+    h: NDArray,
+    dt_s: float,
+    speed_m_s: float,
+    *,
+    density_kg_m3: float,
+    added_mass_coefficient: float = 1.0,
+) -> float:
+    """The part of the thrust (N) that the pressure on the inclined plate carries: the mean of
+    the sections' reactive lateral force l(x, t) times the midline's slope, int <l h_x> dx, with
+    l = -D(A w)/Dt where the sections grow and -A Dw/Dt where they shed vorticity (A' < 0),
+    D/Dt = d/dt + V d/dx. Integrated by parts it is Lighthill's thrust less the suction that
+    potential flow puts at the plate's sharp edges, 1/2 int_{A'>0} A' <w^2> dx and the nose's
+    term: a sharp-edged plate sheds vortices there instead (the flume's CFD bears this out,
+    docs/swimming.md). ``h``: (n_t, n_x) over whole periods."""
+    x = np.asarray(x, dtype=float)
+    h = np.asarray(h, dtype=float)
+    area = added_mass_per_length(half_height, density_kg_m3, added_mass_coefficient)
+    h_x = np.gradient(h, x, axis=1)
+    w = periodic_derivative(h, dt_s) + speed_m_s * h_x
+
+    def material(f: NDArray) -> NDArray:  # D/Dt
+        return periodic_derivative(f, dt_s) + speed_m_s * np.gradient(f, x, axis=1)
+
+    shedding = np.gradient(area, x) < 0
+    force = np.where(shedding[None, :], -area[None, :] * material(w), -material(area[None, :] * w))
+    return float(trapezoid(np.mean(force * h_x, axis=0), x))
+
+
 def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:
     """V* >= 0 with thrust(V*) = drag(V*); 0 when the motion gives no thrust at rest."""
     if not thrust(0.0) > 0:

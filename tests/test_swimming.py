@@ -216,3 +216,35 @@ def test_three_robots_peak_body_lengths_per_second_rank_as_measured(square_curve
         for r, rows in square_curves.items()
     }
     assert sorted(model, key=model.get) == sorted(measured, key=measured.get)
+
+
+def test_pressure_thrust_is_lighthills_less_the_edge_suction():
+    """int <l h_x> dx (the pressure's share, fluid_adapter.swimming.mean_pressure_thrust),
+    integrated by parts: [A (<w^2>/2 - V <w h_x>)] from nose to tail, less 1/2 int A' <w^2>,
+    plus V int_{A'<0} A' <w h_x> where the sections shed (l = -A Dw/Dt there). Lighthill's
+    thrust differs from it by the suction on the growing sections and the nose's term."""
+    from scipy.integrate import trapezoid
+
+    from fluid_adapter.slender_body import added_mass_per_length, periodic_derivative
+    from fluid_adapter.swimming import mean_pressure_thrust
+
+    length, f, speed, rho = 0.17, 10.0, 0.3, 1820.0
+    x = np.linspace(0, length, 1201)
+    b = 0.02 + 0.01 * np.sin(np.pi * x / length) ** 2  # grows, then shrinks
+    t = np.arange(128) / (128 * f)
+    omega = 2 * np.pi * f
+    h = 0.004 * np.sin(4 * np.pi * x[None, :] / length - omega * t[:, None]) * (0.3 + x / length)
+    h += 0.002 * np.cos(3 * omega * t[:, None] + 20 * x[None, :])
+    area = added_mass_per_length(b, rho)
+    h_x = np.gradient(h, x, axis=1)
+    w = periodic_derivative(h, t[1]) + speed * h_x
+    slope = np.gradient(area, x)
+
+    def end(i: int) -> float:
+        return area[i] * (0.5 * np.mean(w[:, i] ** 2) - speed * np.mean(w[:, i] * h_x[:, i]))
+
+    expected = end(-1) - end(0) - 0.5 * trapezoid(slope * np.mean(w**2, axis=0), x)
+    expected += trapezoid(np.where(slope < 0, speed * slope * np.mean(w * h_x, axis=0), 0), x)
+    got = mean_pressure_thrust(x, b, h, t[1], speed, density_kg_m3=rho)
+    assert got == pytest.approx(expected, rel=1e-3)
+    assert abs(got) > 0.01  # not a vanishing case

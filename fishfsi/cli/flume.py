@@ -107,7 +107,10 @@ def flume_summary(case: Case, output: Path, say=print) -> dict:
         "cfd_periodic": change <= tolerance * max(abs(cfd), 1e-12),
         # with the form drag of what the baffle does not model: a flume balance's reading
         "cfd_net_force_n": cfd - form,
-        "model_plate_force_n": fast["thrust_at_speed_n"] - fast["skin_friction_drag_n"],
+        "model_plate_force_n": (fast["lighthill_thrust_at_speed_n"] - fast["skin_friction_drag_n"]),
+        "model_pressure_plate_force_n": (
+            fast["pressure_thrust_at_speed_n"] - fast["skin_friction_drag_n"]
+        ),
         "cfd_cells": result.cells,
         "cfd_wall_s": result.wall_s,
         "wall_s": time.perf_counter() - start,

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.planform import resolve_fish
+from fsi_orchestrator.case.schema import ThrustModel
 
 if TYPE_CHECKING:
     from fluid_adapter.swimming import BodyDrag, Turning
@@ -45,11 +46,17 @@ class SwimmingModel:
     added_mass_coefficient: float
     crossflow_drag_coefficient: float
     prescribed_speed_m_s: float | None
+    pressure_thrust: bool = False  # swimming.thrust_model = "pressure"
 
     def row(self, times: NDArray, h: NDArray, frequency_hz: float) -> dict:
         """The swimming columns of one drive from the midline history ``h`` (len(times), n_x)
         sampled at ``times`` over one period (the end point may repeat the start)."""
-        from fluid_adapter.swimming import mean_thrust, self_propelled_speed, turning_rate
+        from fluid_adapter.swimming import (
+            mean_pressure_thrust,
+            mean_thrust,
+            self_propelled_speed,
+            turning_rate,
+        )
 
         dt = float(times[1] - times[0])
         h = np.asarray(h)[-round(1 / (frequency_hz * dt)) :]
@@ -59,9 +66,11 @@ class SwimmingModel:
             "added_mass_coefficient": self.added_mass_coefficient,
         }
 
+        thrust_of = mean_pressure_thrust if self.pressure_thrust else mean_thrust
+
         def speed_with(slip: float) -> tuple[float, float]:
             h_body = h + slip * r
-            thrust = lambda v: mean_thrust(x, b, h_body, dt, v, **fluid)  # noqa: E731
+            thrust = lambda v: thrust_of(x, b, h_body, dt, v, **fluid)  # noqa: E731
             speed = self.prescribed_speed_m_s
             if speed is None:
                 speed = self_propelled_speed(thrust, self.drag.total)
@@ -91,6 +100,11 @@ class SwimmingModel:
             "swimming_number": speed / (frequency_hz * length),
             "turning_rate_deg_s": float(np.degrees(turn.yaw_rate_rad_s)),
             "thrust_at_speed_n": thrust,
+            # both thrust models' values at that speed (the flume compares them with CFD)
+            "lighthill_thrust_at_speed_n": mean_thrust(x, b, h + slip * r, dt, speed, **fluid),
+            "pressure_thrust_at_speed_n": mean_pressure_thrust(
+                x, b, h + slip * r, dt, speed, **fluid
+            ),
             "drag_at_speed_n": float(sum(drag.values())),
             # 0 at the self-propelled speed; at a prescribed speed, what a flume's balance reads
             "net_force_n": thrust - float(sum(drag.values())),
@@ -143,6 +157,7 @@ def swimming_model(case: Case, model, x_m: NDArray) -> SwimmingModel:
         added_mass_coefficient=fluid.added_mass_coefficient,
         crossflow_drag_coefficient=s.crossflow_drag_coefficient,
         prescribed_speed_m_s=s.speed_m_s,
+        pressure_thrust=s.thrust_model is ThrustModel.PRESSURE,
     )
 
 

@@ -57,6 +57,11 @@ class SkinFriction(StrEnum):
     BLASIUS = "blasius"  # 1.328 / sqrt(Re), laminar
 
 
+class ThrustModel(StrEnum):
+    LIGHTHILL = "lighthill"  # elongated-body thrust, edge suction included (eq. 5-12)
+    PRESSURE = "pressure"  # its share carried by the pressure: no suction at sharp edges
+
+
 class Integrator(StrEnum):
     GENERALIZED_ALPHA = "generalized-alpha"
     NEWMARK = "newmark"  # average acceleration (trapezoidal rule)
@@ -764,6 +769,13 @@ class Swimming:
         unit="m/s",
         ge=0,
         le=20,
+    )
+    thrust_model: ThrustModel = param(
+        ThrustModel.LIGHTHILL,
+        "Mean thrust of the motion: lighthill (elongated-body theory, seed eqs. 5-1..5-12) or "
+        "pressure (the sections' reactive force on the inclined plate alone, without the "
+        "suction potential flow puts at the sharp edges; closer to the flume's CFD, "
+        "docs/swimming.md).",
     )
     skin_friction: SkinFriction = param(
         SkinFriction.ITTC_1957,
