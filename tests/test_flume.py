@@ -126,6 +126,17 @@ def test_bad_flume_input_names_the_key(overrides, named):
         load_case(FLUME, overrides=overrides)
 
 
+def test_a_flume_inflow_other_than_the_swimming_speed_is_refused_naming_it():
+    from fishfsi.cli.flume import flume_case
+
+    case = load_case(FLUME, overrides=["fluid.inflow_m_s=0.3"])
+    with pytest.raises(
+        CaseError, match=r"fluid\.inflow_m_s = 0\.3: .*swimming\.speed_m_s \(0\.8\)"
+    ):
+        flume_case(case)
+    assert flume_case(load_case(FLUME)).fluid.inflow_m_s == 0.8
+
+
 def test_the_flume_case_runs_its_fast_model_at_the_flume_speed():
     case = load_case(FLUME, overrides=["fluid.model=potential"])
     assert case.swimming.speed_m_s == 0.8

@@ -593,7 +593,8 @@ class Fluid:
         0.0,
         "openfoam: a flume: uniform inflow along +x (nose to tail) through the tank's front "
         "wall, an outlet at its back wall, the other walls and the top slip. 0: the closed "
-        "tank (docs/swimming.md).",
+        "tank. A swimming case with fluid.model = openfoam sets it to swimming.speed_m_s "
+        "(docs/swimming.md).",
         unit="m/s",
         ge=0,
         le=5,
@@ -775,7 +776,7 @@ class Swimming:
         "Mean thrust of the motion: lighthill (elongated-body theory, seed eqs. 5-1..5-12) or "
         "pressure (the sections' reactive force on the inclined plate alone, without the "
         "suction potential flow puts at the sharp edges; closer to the flume's CFD, "
-        "docs/swimming.md).",
+        "docs/swimming.md). The speed only: turning keeps Lighthill's side force.",
     )
     skin_friction: SkinFriction = param(
         SkinFriction.ITTC_1957,
