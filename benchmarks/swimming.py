@@ -84,7 +84,31 @@ def turns() -> dict:
     return found
 
 
-def report(rows: dict, seconds: dict, turning: dict) -> str:
+# springs under the head (boundary.head = "elastic"): what the seed leaves open restraining it
+HEAD_SPRINGS_N_PER_M = (None, 1e3, 3e3, 1e4, 3e4)
+
+
+def head_springs() -> list[tuple[float | None, dict, dict]]:
+    """The original robot at 18 Hz square with its head free, then on springs: speed with
+    each thrust model and the tail amplitude."""
+    folder, base = ROBOTS["original"]
+    found = []
+    for k in HEAD_SPRINGS_N_PER_M:
+        held = (
+            []
+            if k is None
+            else ["boundary.head=elastic", f"boundary.support_stiffness_n_per_m={k:g}"]
+        )
+        by_model = {
+            m: swimming_summary(load_case(folder, [*base, *held, f"swimming.thrust_model={m}"]))
+            for m in ("lighthill", "pressure")
+        }
+        found.append((k, by_model["lighthill"], by_model["pressure"]))
+        print(f"head springs {k}: {by_model['pressure']['swimming_speed_m_s']:.2f} m/s", flush=True)
+    return found
+
+
+def report(rows: dict, seconds: dict, turning: dict, springs: list) -> str:
     lines = [
         START,
         "",
@@ -124,6 +148,23 @@ def report(rows: dict, seconds: dict, turning: dict) -> str:
         )
     lines += [
         "",
+        "Original robot, 18 Hz square, head on springs (`--set boundary.head=elastic --set "
+        "boundary.support_stiffness_n_per_m=K`; the springs rest under the head weight, along "
+        "x, y and z):",
+        "",
+        "| head | tail amplitude [mm] | speed, Lighthill's thrust [m/s] | speed, pressure "
+        "share [m/s] | pressure share's thrust there [N] |",
+        "|---|---|---|---|---|",
+    ]
+    for k, lighthill, pressure in springs:
+        head = "free" if k is None else f"springs {k:g} N/m"
+        lines.append(
+            f"| {head} | {lighthill['tip_amplitude_m'] * 1e3:.1f} | "
+            f"{lighthill['swimming_speed_m_s']:.2f} | {pressure['swimming_speed_m_s']:.2f} | "
+            f"{pressure['pressure_thrust_at_speed_n']:+.3f} |"
+        )
+    lines += [
+        "",
         f"Per speed curve ({len(FREQUENCIES)} frequencies, 2-30 Hz) " + _timing(seconds),
         "",
         END,
@@ -145,7 +186,7 @@ def write_docs(text: str) -> None:
 
 def main(argv: list[str]) -> None:
     rows, seconds = curves()
-    text = report(rows, seconds, turns())
+    text = report(rows, seconds, turns(), head_springs())
     print(text)
     if "--write-docs" in argv:
         write_docs(text)

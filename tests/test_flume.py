@@ -228,3 +228,16 @@ def test_fsi_run_of_the_flume_case_reports_the_cfd_and_the_model(tmp_path):
     forces = np.loadtxt(out / "flume_forces.csv", delimiter=",")
     assert forces.shape == (20, 4) and np.isfinite(forces).all()
     assert "flume: OpenFOAM" in done.stderr
+
+
+def test_a_head_on_stiff_springs_makes_the_pressure_share_swim():
+    """The same robot with its head on springs of 1e4 N/m (boundary.head = "elastic", a
+    sensitivity study): the recoil is held, the pressure share makes thrust at rest and the
+    robot swims (docs/swimming.md: 1.01 m/s); free, it does not."""
+    from fishfsi.cli.linear import swimming_summary
+
+    swim = ROOT / "cases" / "swim_original_18Hz"
+    held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4"]
+    row = swimming_summary(load_case(swim, overrides=[*held, "swimming.thrust_model=pressure"]))
+    assert row["swimming_speed_m_s"] == pytest.approx(1.01, abs=0.02)
+    assert row["pressure_thrust_at_speed_n"] > 0

@@ -198,10 +198,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             raise CaseError(
                 f'analysis.kind = "swimming" needs geometry.kind = "fish", got "{g.kind}"'
             )
-        if case.boundary.head.value != "free":
+        if case.boundary.head.value == "clamped":
             raise CaseError(
-                f'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
-                f'held nowhere), got "{case.boundary.head.value}"'
+                'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
+                'held nowhere) or "elastic" (its head on springs, a sensitivity study of what '
+                'might restrain it), got "clamped"'
             )
         speed = case.swimming.speed_m_s
         if case.fluid.model.value == "openfoam" and (speed is None or speed <= 0):

@@ -473,7 +473,8 @@ class Analysis:
         "(implicit time integration, Newton each step), modal (in "
         'vacuum, or wet with fluid.model = "potential") or swimming (self-propelled speed, '
         "swimming number and turning rate of the free fish from its linear periodic response; "
-        'boundary.head = "free"; keys in [swimming], docs/swimming.md).',
+        'boundary.head = "free", or "elastic" for a restrained head; keys in [swimming], '
+        "docs/swimming.md).",
     )
     load_steps: int = param(10, "static: number of load increments.", ge=1, le=10_000)
     num_modes: int = param(6, "modal: number of elastic modes reported.", ge=1, le=200)
