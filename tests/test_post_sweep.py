@@ -65,3 +65,73 @@ def test_a_sweep_with_uncertainties_is_drawn_with_the_overlay(tmp_path, monkeypa
     monkeypatch.setattr(post, "overlay_seed", lambda *axes: drawn.append(len(axes)))
     target = post.plot_sweep(tmp_path / "sweep.csv", tmp_path)
     assert target.is_file() and target.stat().st_size > 10_000 and drawn == [2]
+
+
+def test_the_mesh_error_is_measured_at_shared_frequencies_and_interpolated_between():
+    """Coarse 10 / 8 / 6 at 1, 3, 5 Hz; the default level has 11 at 1 Hz and 5.4 at 5 Hz:
+    measured |1| and |-0.6| there; at 3 Hz the relative differences +10 % and -10 % average
+    to 0; beyond the last shared frequency the relative error is held."""
+    error, measured = post.mesh_errors([1, 3, 5, 7], [10, 8, 6, 4], [1, 5], [11, 5.4])
+    assert error == pytest.approx([1.0, 0.0, 0.6, 0.4])
+    assert measured.tolist() == [True, False, True, False]
+    error, measured = post.mesh_errors([1, 3], [10, 8], [2], [9])
+    assert all(e != e for e in error) and not measured.any()  # nothing shared: NaN
+
+
+def _write_sweep(folder, rows, identity):
+    folder.mkdir()
+    with open(folder / "sweep.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    (folder / "sweep_case.json").write_text(json.dumps(identity))
+
+
+def _rows(points):
+    return [
+        {
+            "waveform": "sine",
+            "frequency_hz": f,
+            "tip_amplitude_m": a,
+            "mean_thrust_n": t,
+            "thrust_source": "openfoam",
+            "tip_amplitude_periodic_uncertainty_m": 1e-4,
+            "mean_thrust_periodic_uncertainty_n": 1e-3,
+        }
+        for f, a, t in points
+    ]
+
+
+def test_fsi_post_draws_the_mesh_reference_and_lists_both_errors(tmp_path, capsys):
+    default = json.loads(json.dumps(OPENFOAM_COARSE))
+    default["case"]["fluid"]["mesh_level"] = "default"
+    _write_sweep(
+        tmp_path / "coarse", _rows([(3, 0.008, 0.014), (5, 0.005, 0.011)]), OPENFOAM_COARSE
+    )
+    _write_sweep(tmp_path / "default", _rows([(3, 0.0079, 0.0133)]), default)
+    code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / "default")])
+    assert code == 0
+    with open(tmp_path / "coarse" / "sweep_errors.csv", newline="") as fh:
+        table = list(csv.DictReader(fh))
+    assert [r["mesh_error"] for r in table] == ["measured", "interpolated"]
+    assert float(table[0]["mean_thrust_mesh_error_mn"]) == pytest.approx(0.7)
+    # 5 Hz holds 3 Hz's relative difference, -5 %
+    assert float(table[1]["mean_thrust_mesh_error_mn"]) == pytest.approx(0.55)
+    assert float(table[1]["mean_thrust_periodic_uncertainty_mn"]) == pytest.approx(1.0)
+
+
+def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_line(
+    tmp_path, capsys
+):
+    other = json.loads(json.dumps(OPENFOAM_COARSE))
+    other["case"]["fluid"]["mesh_level"] = "default"
+    other["case"]["geometry"]["preset"] = "serial"
+    _write_sweep(tmp_path / "coarse", _rows([(3, 0.008, 0.014)]), OPENFOAM_COARSE)
+    _write_sweep(tmp_path / "serial", _rows([(3, 0.01, 0.02)]), other)
+    _write_sweep(tmp_path / "same", _rows([(3, 0.01, 0.02)]), OPENFOAM_COARSE)
+    for folder, says in (("serial", "geometry.preset"), ("same", "same fluid.mesh_level")):
+        code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / folder)])
+        err = capsys.readouterr().err.strip()
+        assert code == 2 and says in err and len(err.splitlines()) == 1
+    code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / "nowhere")])
+    assert code == 2 and "--mesh-reference" in capsys.readouterr().err

@@ -79,10 +79,12 @@ def overlay_seed(ax_amp, ax_thrust) -> None:
     ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
 
 
-def plot_sweep(csv_path: Path, output: Path) -> Path:
-    """Amplitude and thrust against frequency, one curve per waveform, with the periodic
-    estimate's uncertainty as error bars where the rows carry it; the original fish's sweep
-    also shows the seed's figures."""
+class PostError(ValueError):
+    """Input fsi-post cannot draw, said in one line."""
+
+
+def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
+    """A sweep's rows and what was swept (``sweep_case.json``; None when absent)."""
     with open(csv_path, newline="") as table:
         rows = list(csv.DictReader(table))
     identity = None
@@ -91,11 +93,82 @@ def plot_sweep(csv_path: Path, output: Path) -> Path:
             identity = json.loads((csv_path.parent / "sweep_case.json").read_text())
         except ValueError:
             identity = None
+    return rows, identity
+
+
+def mesh_level(identity: dict | None) -> str | None:
+    return (identity or {}).get("case", {}).get("fluid", {}).get("mesh_level")
+
+
+def check_mesh_reference(identity: dict | None, reference: dict | None, path: Path) -> None:
+    """The reference must be the same sweep on another fluid mesh level, and nothing else."""
+    if identity is None or reference is None:
+        raise PostError(
+            f"{path}: a mesh reference needs both sweeps' sweep_case.json (written by "
+            "fsi-sweep) to tell that they differ only in fluid.mesh_level"
+        )
+    if mesh_level(identity) == mesh_level(reference):
+        raise PostError(
+            f"{path}: the mesh reference is on the same fluid.mesh_level "
+            f"({mesh_level(identity)!r}); sweep the case again with --set fluid.mesh_level=default"
+        )
+    a, b = json.loads(json.dumps(identity)), json.loads(json.dumps(reference))
+    for side in (a, b):
+        side.get("case", {}).get("fluid", {}).pop("mesh_level", None)
+        side.pop("version", None)
+    if a != b:
+        from .sweep import identity_changes
+
+        raise PostError(
+            f"{path}: the mesh reference is another sweep, not only another fluid.mesh_level "
+            f"({identity_changes(a, b)})"
+        )
+
+
+def mesh_errors(
+    freqs: Sequence[float],
+    values: Sequence[float],
+    ref_freqs: Sequence[float],
+    ref_values: Sequence[float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh level's error of each value: the difference to the reference where it has the
+    same frequency; between those, their relative difference interpolated linearly in
+    frequency (held constant beyond them) times the value. Returns (|error|, measured: whether
+    the reference has the frequency); NaN where the reference shares no finite frequency."""
+    f = np.asarray(freqs, float)
+    v = np.asarray(values, float)
+    ref = {float(a): float(b) for a, b in zip(ref_freqs, ref_values, strict=True)}
+    measured = np.array([x in ref and np.isfinite(ref[x]) for x in f])
+    shared = measured & np.isfinite(v) & (v != 0.0)
+    if not shared.any():
+        return np.full(f.shape, np.nan), measured
+    rel = np.array([(ref[x] - y) / y for x, y in zip(f[shared], v[shared], strict=True)])
+    order = np.argsort(f[shared])
+    error = np.abs(np.interp(f, f[shared][order], rel[order]) * v)
+    error[measured] = np.abs([ref[x] - y for x, y in zip(f[measured], v[measured], strict=True)])
+    return error, measured
+
+
+def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None) -> Path:
+    """Amplitude and thrust against frequency, one curve per waveform, with the periodic
+    estimate's uncertainty as error bars where the rows carry it; the original fish's sweep
+    also shows the seed's figures. With ``mesh_reference`` (the same sweep on another fluid
+    mesh level, at some or all of the frequencies) its points are drawn too and the mesh
+    level's error is a band about each curve; ``sweep_errors.csv`` lists both errors."""
+    rows, identity = read_sweep(csv_path)
+    ref_rows: list[dict] = []
+    ref_identity = None
+    if mesh_reference is not None:
+        ref_rows, ref_identity = read_sweep(mesh_reference)
+        check_mesh_reference(identity, ref_identity, mesh_reference)
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
     if is_original_fish(identity):
         overlay_seed(ax_amp, ax_thrust)
+    table = []
     for waveform in sorted({r["waveform"] for r in rows}):
-        sel = [r for r in rows if r["waveform"] == waveform]
+        sel = sorted(
+            (r for r in rows if r["waveform"] == waveform), key=lambda r: float(r["frequency_hz"])
+        )
         label = f"{waveform} ({sweep_label(identity, sel)})"
         f = [float(r["frequency_hz"]) for r in sel]
         amp = [1e3 * _float(r, "tip_amplitude_m") for r in sel]
@@ -103,9 +176,40 @@ def plot_sweep(csv_path: Path, output: Path) -> Path:
         thrust = [1e3 * _thrust(r) for r in sel]
         thrust_err = [1e3 * _float(r, "mean_thrust_periodic_uncertainty_n") for r in sel]
         finite = [e if np.isfinite(e) else 0.0 for e in amp_err]
-        ax_amp.errorbar(f, amp, yerr=finite, fmt="o-", capsize=2, label=label)
+        drawn = ax_amp.errorbar(f, amp, yerr=finite, fmt="o-", capsize=2, label=label)
         finite = [e if np.isfinite(e) else 0.0 for e in thrust_err]
         ax_thrust.errorbar(f, thrust, yerr=finite, fmt="o-", capsize=2, label=label)
+        colour = drawn[0].get_color()
+        if mesh_reference is None:
+            continue
+        ref = [r for r in ref_rows if r["waveform"] == waveform]
+        ref_f = [float(r["frequency_hz"]) for r in ref]
+        ref_amp = [1e3 * _float(r, "tip_amplitude_m") for r in ref]
+        ref_thrust = [1e3 * _thrust(r) for r in ref]
+        amp_mesh, measured = mesh_errors(f, amp, ref_f, ref_amp)
+        thrust_mesh, _ = mesh_errors(f, thrust, ref_f, ref_thrust)
+        ref_label = f"{waveform} ({sweep_label(ref_identity, ref)})"
+        for ax, values, err, ref_values in (
+            (ax_amp, amp, amp_mesh, ref_amp),
+            (ax_thrust, thrust, thrust_mesh, ref_thrust),
+        ):
+            v = np.asarray(values)
+            ax.fill_between(f, v - err, v + err, color=colour, alpha=0.18, lw=0)
+            ax.plot(ref_f, ref_values, "D", mfc="none", color=colour, label=ref_label)
+        for i, freq in enumerate(f):
+            table.append(
+                {
+                    "waveform": waveform,
+                    "frequency_hz": freq,
+                    "tip_amplitude_mm": amp[i],
+                    "tip_amplitude_periodic_uncertainty_mm": amp_err[i],
+                    "tip_amplitude_mesh_error_mm": amp_mesh[i],
+                    "mean_thrust_mn": thrust[i],
+                    "mean_thrust_periodic_uncertainty_mn": thrust_err[i],
+                    "mean_thrust_mesh_error_mn": thrust_mesh[i],
+                    "mesh_error": "measured" if measured[i] else "interpolated",
+                }
+            )
     ax_amp.set_ylabel("tail-tip amplitude [mm]")
     ax_thrust.set_ylabel("mean thrust [mN]")
     ax_thrust.set_xlabel("driving frequency [Hz]")
@@ -113,6 +217,11 @@ def plot_sweep(csv_path: Path, output: Path) -> Path:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize="small")
     fig.tight_layout()
+    if table:
+        with open(output / "sweep_errors.csv", "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(table[0]))
+            writer.writeheader()
+            writer.writerows(table)
     target = output / "sweep.png"
     fig.savefig(target, dpi=120)
     plt.close(fig)
@@ -214,6 +323,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     add_version(parser)
     parser.add_argument("path", help="sweep.csv, results.h5 or a folder holding one")
     parser.add_argument("--output", help="folder for the figures (default: next to the input)")
+    parser.add_argument(
+        "--mesh-reference",
+        metavar="SWEEP",
+        help="the same sweep on another fluid mesh level (sweep.csv or its folder; some "
+        "frequencies are enough): its points and the mesh level's error band are drawn, and "
+        "sweep_errors.csv lists the periodic and the mesh errors",
+    )
     args = parser.parse_args(argv)
     path = Path(args.path)
     candidates = (
@@ -229,7 +345,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     output.mkdir(parents=True, exist_ok=True)
     try:
         if found.suffix == ".csv":
-            print(plot_sweep(found, output))
+            reference = None
+            if args.mesh_reference:
+                reference = Path(args.mesh_reference)
+                if reference.is_dir():
+                    reference = reference / "sweep.csv"
+                if not reference.is_file():
+                    print(f"error: --mesh-reference {reference}: no sweep.csv", file=sys.stderr)
+                    return EXIT_BAD_INPUT
+            print(plot_sweep(found, output, reference))
+            if reference is not None:
+                print(output / "sweep_errors.csv")
             swimming = plot_swimming_sweep(found, output)
             if swimming is not None:
                 print(swimming)
@@ -241,6 +367,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(flow)
         for picture in pictures.draw(found.parent / "vtk", output, drive_period_s(found)):
             print(picture)
+    except PostError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except (KeyError, ValueError, OSError) as err:  # not what fsi-run / fsi-sweep write
         print(
             f"error: {found}: not a table fsi-run or fsi-sweep wrote ({err!r}); "
