@@ -226,7 +226,8 @@ def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_h
     finished, tmp_path, capsys, monkeypatch
 ):
     """The OpenFOAM runs replaced by a record whose score reverses the fast ranking: the
-    reruns get fluid.model = openfoam at the coarse level, by time march, best first."""
+    reruns get fluid.model = openfoam at the coarse level, coupled as the main job (one fluid
+    step per window, pimpleFoam kept loaded), by time march, best first."""
     from fishfsi.design.evaluate import design_key
 
     folder, out, _ = finished
@@ -234,7 +235,7 @@ def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_h
     asked = []
 
     def openfoam(spec, design):
-        asked.append((spec.overrides[-2:], spec.evaluation.value, design.values))
+        asked.append((spec.overrides[-4:], spec.evaluation.value, design.values))
         score = design.values["actuation.frequency_hz"]  # the lower frequency ranks first
         return {
             "key": design_key(design.values),
@@ -248,9 +249,13 @@ def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_h
         capsys, str(folder), "--output", str(tmp_path / "out"), "--resume", "--confirm", "2"
     )
     assert summary["evaluated_now"] == 0
-    assert [a[:2] for a in asked] == [
-        (("fluid.model=openfoam", "fluid.mesh_level=coarse"), "transient")
-    ] * 2
+    coupled_as_the_main_job = (
+        "fluid.model=openfoam",
+        "fluid.mesh_level=coarse",
+        "fluid.max_courant=10",  # one fluid step per window
+        "fluid.driver=persistent",
+    )
+    assert [a[:2] for a in asked] == [(coupled_as_the_main_job, "transient")] * 2
     fast_order = [a[2]["actuation.frequency_hz"] for a in asked]
     assert fast_order[0] == summary["best"]["parameters"]["actuation.frequency_hz"]
     assert summary["confirm"]["ranking_holds"] is (fast_order[0] < fast_order[1])

@@ -100,6 +100,17 @@ def finish(study: Study, evaluator: Evaluator, output: Path, quiet: bool) -> dic
     return best
 
 
+# OpenFOAM as the main job couples it (cases/fixed_head_3Hz): one fluid step per window
+# (sub-stepped windows made converged coupled runs oscillate; an integrative design took
+# 11-14 fluid solves per window with the default Courant limit) and pimpleFoam kept loaded
+CONFIRM_OVERRIDES = (
+    "fluid.model=openfoam",
+    "fluid.mesh_level=coarse",
+    "fluid.max_courant=10",
+    "fluid.driver=persistent",
+)
+
+
 def confirm(study: Study, records: list[dict], k: int, output: Path, say) -> dict:
     """The best k designs again, with OpenFOAM (coarse) in the time march: their objectives
     and whether the fast model's ranking holds."""
@@ -107,7 +118,7 @@ def confirm(study: Study, records: list[dict], k: int, output: Path, say) -> dic
     spec = EvaluationSpec.of(study, output)
     spec = dataclasses.replace(
         spec,
-        overrides=(*spec.overrides, "fluid.model=openfoam", "fluid.mesh_level=coarse"),
+        overrides=(*spec.overrides, *CONFIRM_OVERRIDES),
         evaluation=Evaluation.TRANSIENT,
         folder=output / "confirm",
     )
