@@ -101,8 +101,8 @@ def finish(study: Study, evaluator: Evaluator, output: Path, quiet: bool) -> dic
 
 
 # OpenFOAM as the main job couples it (cases/fixed_head_3Hz): one fluid step per window
-# (sub-stepped windows made converged coupled runs oscillate; an integrative design took
-# 11-14 fluid solves per window with the default Courant limit) and pimpleFoam kept loaded
+# (sub-stepped windows made converged coupled runs oscillate, docs/coupling.md) and
+# pimpleFoam kept loaded
 CONFIRM_OVERRIDES = (
     "fluid.model=openfoam",
     "fluid.mesh_level=coarse",
