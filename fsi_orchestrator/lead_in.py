@@ -87,6 +87,11 @@ class LeadIn:
         self.prescribed_wall_s_per_window: float | None = None
         self.wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
 
+    @property
+    def fluid_windows(self) -> int:
+        """The lead-in's fluid windows: one period, two with a start orbit (the blend)."""
+        return self.windows if self.start_orbit is None else 2 * self.windows
+
     def run(self, solid: Participant, dt: float, arrive: Callable[[Motion], None]) -> None:
         """The lead-in (none without windows or frequency); ``arrive(motion)`` hands on the
         motion the fluid was moved through, ending at t = 0 (the initial data)."""

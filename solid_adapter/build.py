@@ -236,8 +236,13 @@ class CorrectableStart:
     ) -> None:
         self.case, self.model, self.solid = case, model, solid
         self._added_mass_z = added_mass_z
-        with self._start_inertia():
-            self._shape_z = self._in_phase_shape(self._orbit(None))
+        # the orbit the shell starts on was computed with this inertia (a start from rest has
+        # none: then the orbit it would have had)
+        orbit = solid.orbit
+        if orbit is None:
+            with self._start_inertia():
+                orbit = self._orbit(None)
+        self._shape_z = self._in_phase_shape(orbit)
 
     @property
     def shape_z(self) -> NDArray:

@@ -191,7 +191,7 @@ def run_dynamic(
     if coupling is not None and coupling.settings.lead_in_windows > 0 and not resume:
         progress.release()
         progress.say(
-            f"lead-in: {coupling.settings.lead_in_windows} prescribed-motion fluid windows "
+            f"lead-in: {coupling.start_up.fluid_windows} prescribed-motion fluid windows "
             "before window 1 (its time counts into window 1)"
         )
     try:
