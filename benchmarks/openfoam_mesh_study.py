@@ -12,6 +12,8 @@ elongated-body estimate of the same motion (fluid_adapter.slender_body).
 ``--windows 64`` halves the window (and the fluid step) to separate time from space.
 ``--frequency 18 --amplitude-mm 9`` repeats the study at the seed's peak-thrust frequency with
 the coupled runs' tail amplitude there (the same shape: a proxy for the coupled motion).
+``--periods 8`` shows how fast the flow alone becomes periodic (mean thrust and lateral force
+amplitude per period, ``per_period``).
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import json
 import shutil
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 from fishfsi.cli.prescribed import (
     ACOUSTIC_TAIL_AMPLITUDE_M,
@@ -38,6 +42,7 @@ def run_level(
     windows: int,
     frequency_hz: float = 3.0,
     amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
+    periods: int = PERIODS,
 ) -> dict:
     case = case_from_dict(
         {
@@ -50,11 +55,16 @@ def run_level(
         case,
         root / level,
         amplitude_m=amplitude_m,
-        periods=PERIODS,
+        periods=periods,
         steps_per_period=windows,
     )
     period = result.force_n[-windows:]
+    each = [slice(k * windows, (k + 1) * windows) for k in range(periods)]
     return {
+        "per_period": {
+            "mean_thrust_n": [float(result.thrust_n[s].mean()) for s in each],
+            "lateral_force_amplitude_n": [float(np.ptp(result.force_n[s, 2]) / 2) for s in each],
+        },
         "level": level,
         "cells": result.cells,
         "windows_per_period": windows,
@@ -73,6 +83,7 @@ def main() -> None:
     parser.add_argument(
         "--amplitude-mm", type=float, default=1e3 * ACOUSTIC_TAIL_AMPLITUDE_M, help="at the tail"
     )
+    parser.add_argument("--periods", type=int, default=PERIODS, help="mean over the last")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     root = Path(tempfile.mkdtemp(prefix="fishfsi-mesh-study-"))
@@ -80,7 +91,9 @@ def main() -> None:
     try:
         for level in args.levels:
             amplitude = 1e-3 * args.amplitude_mm
-            rows.append(run_level(level, root, args.windows, args.frequency, amplitude))
+            rows.append(
+                run_level(level, root, args.windows, args.frequency, amplitude, args.periods)
+            )
             print(json.dumps(rows[-1]), flush=True)
     finally:
         shutil.rmtree(root, ignore_errors=True)
