@@ -110,7 +110,8 @@ def check_mesh_reference(identity: dict | None, reference: dict | None, path: Pa
     if mesh_level(identity) == mesh_level(reference):
         raise PostError(
             f"{path}: the mesh reference is on the same fluid.mesh_level "
-            f"({mesh_level(identity)!r}); sweep the case again with --set fluid.mesh_level=default"
+            f"({mesh_level(identity)!r}); sweep the case again with another "
+            "--set fluid.mesh_level=..."
         )
     a, b = json.loads(json.dumps(identity)), json.loads(json.dumps(reference))
     for side in (a, b):
