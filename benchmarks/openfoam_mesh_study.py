@@ -83,7 +83,12 @@ def main() -> None:
     parser.add_argument(
         "--amplitude-mm", type=float, default=1e3 * ACOUSTIC_TAIL_AMPLITUDE_M, help="at the tail"
     )
-    parser.add_argument("--periods", type=int, default=PERIODS, help="mean over the last")
+    parser.add_argument(
+        "--periods",
+        type=int,
+        default=PERIODS,
+        help="periods to run; the mean thrust is the last one's",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     root = Path(tempfile.mkdtemp(prefix="fishfsi-mesh-study-"))

@@ -14,6 +14,7 @@ Writes PNG files next to the input (or to ``--output``) and prints their paths.
 from __future__ import annotations
 
 import argparse
+import copy
 import csv
 import json
 import sys
@@ -60,7 +61,7 @@ def sweep_label(identity: dict | None, rows: list[dict]) -> str:
         return ", ".join(sources)
     case = identity.get("case", {})
     if case.get("fluid", {}).get("model") == "openfoam" and identity.get("method") != "linear":
-        level = f"OpenFOAM {case.get('fluid', {}).get('mesh_level', '?')}"
+        level = f"OpenFOAM {mesh_level(identity) or '?'}"
     else:
         level = f"shell {case.get('mesh', {}).get('level', '?')}, {identity.get('method', '?')}"
     return f"{', '.join(sources)}; {level}"
@@ -113,7 +114,7 @@ def check_mesh_reference(identity: dict | None, reference: dict | None, path: Pa
             f"({mesh_level(identity)!r}); sweep the case again with another "
             "--set fluid.mesh_level=..."
         )
-    a, b = json.loads(json.dumps(identity)), json.loads(json.dumps(reference))
+    a, b = copy.deepcopy(identity), copy.deepcopy(reference)
     for side in (a, b):
         side.get("case", {}).get("fluid", {}).pop("mesh_level", None)
         side.pop("version", None)
