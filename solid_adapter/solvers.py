@@ -20,7 +20,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from .shell import NDOF, MixedNewtonInternal, ShellModel
+from .shell import NDOF, Damping, MixedNewtonInternal, ShellModel, StrainRate
 
 LoadFn = Callable[[float, NDArray, bool], tuple[NDArray, sp.spmatrix | None]]
 VoltFn = Callable[[float], NDArray]
@@ -528,6 +528,20 @@ class CombinedDamping:
         return sum(p.linear(model, orbit) for p in self.parts)
 
 
+def split_strain_rate(damping: Damping | None) -> tuple[float, Damping | None]:
+    """(beta of the stiffness-proportional (Kelvin-Voigt) part, the rest of the damping): the
+    generalized-alpha step takes beta's part into the stresses (StrainRate), the rest as a
+    force of the velocity."""
+    if isinstance(damping, RayleighDamping):
+        return damping.beta, (RayleighDamping(damping.alpha, 0.0) if damping.alpha else None)
+    if isinstance(damping, CombinedDamping):
+        split = [split_strain_rate(p) for p in damping.parts]
+        rest = tuple(r for _, r in split if r is not None)
+        other = CombinedDamping(rest) if len(rest) > 1 else (rest[0] if rest else None)
+        return sum(b for b, _ in split), other
+    return 0.0, damping
+
+
 @dataclass(frozen=True)
 class AddedMassAsForce:
     """The model's added mass M~ stands for part of a partitioned coupling's exchanged force
@@ -685,8 +699,17 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         v1, a1 = self._kinematics(s, dt, x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        state = DynamicState(t1, x1, v1, a1, f_int, f_ext, self._damping_force(x1, v1))
+        rate, other = self._strain_rate(s, dt)
+        f_damp = np.zeros_like(x1) if other is None else other.force(m, x1, v1)[0]
+        if rate is not None:
+            f_damp += m.internal(x1, V1, False, rate=rate)[0] - f_int
+        state = DynamicState(t1, x1, v1, a1, f_int, f_ext, f_damp)
         return replace(state, past=s.past) if added is None else added.carried(state, s)
+
+    def _strain_rate(self, s: DynamicState, dt: float) -> tuple[StrainRate | None, Damping | None]:
+        """The step's Kelvin-Voigt damping as stresses (see StrainRate) and the rest."""
+        beta, other = split_strain_rate(self.damping)
+        return (StrainRate(beta / dt, s.x) if beta else None), other
 
     def _kinematics(self, s: DynamicState, dt: float, x1: NDArray) -> tuple[NDArray, NDArray]:
         """Newmark's (v1, a1) at x1."""
@@ -731,22 +754,25 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
     ) -> ResidualFn:
         """The generalized-alpha balance at x1 and its tangent."""
         p, m, t1 = self.p, self.model, s.t + dt
-        internal = MixedNewtonInternal(m)
+        rate, other = self._strain_rate(s, dt)
+        internal = MixedNewtonInternal(m, rate)
         c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
         c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
 
         def residual(x1: NDArray, tangent: bool):
             v1, a1 = self._kinematics(s, dt, x1)
-            f_int, K = internal(x1, V1, tangent)
+            f_int, K = internal(x1, V1, tangent)  # with the strain-rate damping, if any
             f_ext, Kf = loads(t1, x1, tangent)
             r = m.inertia @ ((1 - p.alpha_m) * a1 + p.alpha_m * s.a)
             if added is not None:
                 r += added.force(x1, a1)
             r += (1 - p.alpha_f) * (f_int - f_ext) + p.alpha_f * (s.f_int - s.f_ext)
-            C = None
             if self.damping is not None:
-                f_d, C = self.damping.force(m, x1, v1)
-                r += (1 - p.alpha_f) * f_d + p.alpha_f * s.f_damp
+                r += p.alpha_f * s.f_damp
+            C = None
+            if other is not None:
+                f_d, C = other.force(m, x1, v1)
+                r += (1 - p.alpha_f) * f_d
             if not tangent:
                 return r, None
             assert K is not None

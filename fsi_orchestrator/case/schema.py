@@ -324,8 +324,9 @@ class Material:
         0.0,
         "Structural (hysteretic) loss factor eta of the laminate, stiffness K (1 + i eta). The "
         "linear sweep uses it as such at every frequency; a transient as the stiffness-"
-        "proportional damping eta / omega (exact at omega), omega the drive's angular "
-        "frequency or, below it, the first bending mode's. The seed's cases take 0.013, 1 / Q_m of "
+        "proportional (Kelvin-Voigt, strain-rate) damping eta / omega (exact at omega), omega the "
+        "drive's angular frequency or, below it, the first bending mode's. The seed's cases take "
+        "0.013, 1 / Q_m of "
         "the MFC's PZT-5A fibres (Q_m 75-80 on PZT-5A data sheets): the MFC layers carry most "
         "of the bending stiffness.",
         ge=0,
