@@ -20,6 +20,7 @@ from fluid_adapter.openfoam import (
 )
 from fluid_adapter.openfoam.checkmesh import check_mesh
 from fluid_adapter.openfoam.foamio import read_points, update_dict, write_dict
+from fluid_adapter.openfoam.loads import face_order
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
 from fsi_orchestrator.participant import DISPLACEMENT
@@ -198,3 +199,17 @@ def test_two_ranks_restore_a_window_as_serial():
         assert np.abs(forces[2] - forces[1]).max() / scale < 1e-4
     finally:
         shutil.rmtree(root, ignore_errors=True)
+
+
+def test_a_fluid_plate_that_left_the_structure_is_one_line_naming_the_step(tmp_path):
+    """The sampled faces' centres can no longer be matched one to one with the interface's (a
+    failed mesh motion): an OpenFoamRunError (one line from the commands), not a ValueError
+    traceback."""
+    expected = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [2e-3, 0.0, 0.0]])
+    sampled = np.array([[0.0, 0.0, 5e-3], [0.1e-3, 0.0, 5e-3], [0.2e-3, 0.0, 5e-3]])
+    with pytest.raises(OpenFoamRunError, match=r"fishPlusZ: the fluid mesh's plate no longer"):
+        face_order(sampled, expected, tmp_path / "fishPlusZ")
+    with pytest.raises(OpenFoamRunError, match="2 faces sampled, expected 3"):
+        face_order(sampled[:2], expected, tmp_path / "fishPlusZ")
+    # a processor merge's reordering is still matched
+    np.testing.assert_array_equal(face_order(expected[::-1], expected, tmp_path), [2, 1, 0])

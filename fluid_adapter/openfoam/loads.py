@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from .casefiles import SAMPLE_FO
+from .errors import OpenFoamRunError
 from .interface import FluidInterface
 
 
@@ -71,13 +72,21 @@ def face_order(sampled: NDArray, expected: NDArray, where: Path) -> NDArray:
     """Index into the sampled rows for each expected face: identity in serial; a parallel run
     merges the processors' pieces in another order, matched here by nearest face centre."""
     if len(sampled) != len(expected):
-        raise ValueError(f"{where}: {len(sampled)} faces sampled, expected {len(expected)}")
+        raise OpenFoamRunError(
+            f"{where}: {len(sampled)} faces sampled, expected {len(expected)}; the case folder "
+            "does not hold this run's mesh (start the run again in an empty --output)"
+        )
     size = np.sqrt(np.ptp(expected, axis=0).max() ** 2 / max(len(expected), 1))
     if np.abs(sampled - expected).max() < 0.1 * size:
         return np.arange(len(expected))
-    _, order = cKDTree(sampled).query(expected)
+    distance, order = cKDTree(sampled).query(expected)
     if len(np.unique(order)) != len(order):
-        raise ValueError(f"{where}: sampled faces do not match the interface faces one to one")
+        raise OpenFoamRunError(
+            f"{where}: the fluid mesh's plate no longer follows the structure (face centres up "
+            f"to {1e3 * distance.max():.3g} mm apart, faces about {1e3 * size:.3g} mm wide); "
+            "the mesh motion failed at this deflection: take smaller windows "
+            "(more time.steps_per_period) or a smaller drive"
+        )
     return order
 
 
