@@ -677,7 +677,8 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         m, t1 = self.model, s.t + dt
         V1 = volts(t1)
         added = self._added_mass_term(s, dt, stencil)
-        residual = self._residual(s, dt, loads, V1, added)
+        rate, other = self._strain_rate(s, dt)
+        residual = self._residual(s, dt, loads, V1, added, rate, other)
         # start: the caller's guess, else x (a constant-acceleration start x + dt v + dt^2/2 a
         # took 6-7 Newton iterations instead of 4-5 on the coupled fish: the fast DOFs' a is
         # not smooth)
@@ -699,7 +700,6 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         v1, a1 = self._kinematics(s, dt, x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        rate, other = self._strain_rate(s, dt)
         f_damp = np.zeros_like(x1) if other is None else other.force(m, x1, v1)[0]
         if rate is not None:
             f_damp += m.internal(x1, V1, False, rate=rate)[0] - f_int
@@ -751,10 +751,12 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         loads: LoadFn,
         V1: NDArray,
         added: _AddedMassAtAlphaF | _AddedMassOnStencil | None,
+        rate: StrainRate | None,
+        other: Damping | None,
     ) -> ResidualFn:
-        """The generalized-alpha balance at x1 and its tangent."""
+        """The generalized-alpha balance at x1 and its tangent; ``rate`` and ``other``: the
+        step's damping (see _strain_rate)."""
         p, m, t1 = self.p, self.model, s.t + dt
-        rate, other = self._strain_rate(s, dt)
         internal = MixedNewtonInternal(m, rate)
         c_a = (1 - p.alpha_m) / (p.beta * dt * dt)
         c_v = (1 - p.alpha_f) * p.gamma / (p.beta * dt)
