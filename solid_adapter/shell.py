@@ -64,10 +64,7 @@ class StrainRate:
         drops out of the difference), computed once per voltage."""
         key = tuple(np.asarray(volts, dtype=float).ravel())
         if self._strains is None or self._strains[0] != key:
-            X = model.nodal(self.reference)
-            d = director(X[:, 3:])[0]
-            parts = model._parts(X[model.enodes, :3], d[model.enodes], volts, with_b=False)
-            self._strains = (key, [p.strain for p in parts])
+            self._strains = (key, model.part_strains(self.reference, volts))
         return self._strains[1]
 
 
@@ -350,6 +347,12 @@ class ShellModel:
             parts.append(_membrane_shear_part(full, self.sec_full, eps, kin_f, B_f, volts))
         parts.append(_bending_part(full, self.sec_full, kin_f, B_f, volts))
         return parts
+
+    def part_strains(self, x: NDArray, volts: NDArray) -> list[NDArray]:
+        """The strain measures of each energy part at x (no B matrices)."""
+        X = self.nodal(x)
+        d = director(X[:, 3:])[0]
+        return [p.strain for p in self._parts(X[self.enodes, :3], d[self.enodes], volts, False)]
 
     def strain_energy(self, x: NDArray, volts: NDArray) -> float:
         """Stored energy, integrated exactly as the internal forces are."""
