@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -18,8 +19,9 @@ from fluid_adapter.openfoam import (
     build_openfoam_participant,
     runner,
 )
-from fluid_adapter.openfoam.checkmesh import check_mesh
+from fluid_adapter.openfoam.checkmesh import check_mesh, folded_mesh
 from fluid_adapter.openfoam.foamio import read_points, update_dict, write_dict
+from fluid_adapter.openfoam.interface import face_centroids
 from fluid_adapter.openfoam.loads import face_order
 from fsi_orchestrator.case.loader import case_from_dict
 from fsi_orchestrator.case.schema import FluidDriver
@@ -91,6 +93,35 @@ def test_solver_crash_quotes_the_log_and_keeps_the_case(tmp_path):
     with pytest.raises(OpenFoamRunError, match=r"(?s)pimpleFoam failed.*case folder kept.*FATAL"):
         p.solve(DT)
     assert (p.run.path / "log.pimpleFoam").is_file() and (p.run.path / "0").is_dir()
+
+
+@pytest.mark.openfoam
+@needs_openfoam
+def test_a_fin_folded_past_the_mesh_motion_is_named_with_where(tmp_path):
+    """The clamped integrative robot's fin swung its trailing edge 15 mm forward and 22 mm
+    sideways (docs/benchmarks.md): the cells behind the edge turned inside out, and pimpleFoam
+    ran on them for windows. ``folded_mesh`` (checked every 10 windows, and on a divergence)
+    names the fold and where it is; a whole moved mesh passes."""
+    _, p = small_participant(tmp_path)
+    mesh = p.run.path / "constant" / "polyMesh"
+    points = read_points(mesh / "points")
+    plate = p.run.interface.mesh_points
+    edge = plate[points[plate, 0] > points[plate, 0].max() - 1e-9]
+    for name, shift in (("1", (0.0, 0.0, 1e-3)), ("2", (-15e-3, 0.0, 22e-3))):
+        moved = points.copy()
+        moved[edge] += shift
+        folder = p.run.path / name / "polyMesh"
+        folder.mkdir(parents=True)
+        shutil.copy(mesh / "points", folder / "points")
+        with FoamFile(folder / "points") as f:
+            f[None] = moved
+    assert folded_mesh(p.run.path, "1") is None
+    found = folded_mesh(p.run.path, "2")
+    assert found is not None
+    assert re.search(r"t=2 is folded: \d+ faces inside out at x \d+", found), found
+    x_mm = 1e3 * (points[edge, 0].max() - 15e-3)
+    x_named = float(re.search(r"inside out at x (\d+)", found).group(1))
+    assert abs(x_named - x_mm) < 10.0, found  # at the moved edge
 
 
 @pytest.mark.openfoam
@@ -213,3 +244,24 @@ def test_a_fluid_plate_that_left_the_structure_is_one_line_naming_the_step(tmp_p
         face_order(sampled[:2], expected, tmp_path / "fishPlusZ")
     # a processor merge's reordering is still matched
     np.testing.assert_array_equal(face_order(expected[::-1], expected, tmp_path), [2, 1, 0])
+
+
+def test_face_centres_are_openfoams_area_centroids_on_tapered_faces(tmp_path):
+    """A face tapering from 3 mm to 0.1 mm over 8 mm (the integrative robot's graded peduncle):
+    the area centroid, x = L (H + 2 h) / (3 (H + h)), is 1.25 mm from the points' mean, more
+    than the 0.1-face tolerance of the serial order check. The interface's centres are the
+    centroids, so the sampled faces of a plate that follows the structure match one to one."""
+    L, H, h = 8e-3, 3e-3, 0.1e-3
+    points = np.array([[0, -H / 2, 0], [L, -h / 2, 0], [L, h / 2, 0], [0, H / 2, 0]], dtype=float)
+    # a strip of such faces, shifted along x, bent out of plane (a fin at 30 degrees)
+    shift = np.array([L, 0.0, 0.0])
+    strip = np.concatenate([points + k * shift for k in range(6)])
+    strip[:, 2] = 0.5 * strip[:, 0]
+    faces = np.arange(len(strip)).reshape(-1, 4)
+    centres = face_centroids(strip, faces)
+    x_exact = L * (H + 2 * h) / (3 * (H + h)) + np.arange(6) * L
+    np.testing.assert_allclose(centres[:, 0], x_exact, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(centres[:, 1], 0.0, atol=1e-18)
+    np.testing.assert_allclose(centres[:, 2], 0.5 * x_exact, rtol=0, atol=1e-15)
+    assert np.abs(strip[faces].mean(axis=1)[:, 0] - x_exact).max() > 1.2e-3
+    np.testing.assert_array_equal(face_order(centres, centres, tmp_path), np.arange(6))

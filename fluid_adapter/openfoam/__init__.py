@@ -8,6 +8,7 @@ from .build import build_openfoam_participant, case_schedule
 from .errors import (
     DivergenceError,
     DriverError,
+    MeshFoldedError,
     MeshQualityError,
     OpenFoamError,
     OpenFoamNotFoundError,
@@ -18,6 +19,7 @@ from .participant import OpenFoamParticipant
 __all__ = [
     "DivergenceError",
     "DriverError",
+    "MeshFoldedError",
     "MeshQualityError",
     "OpenFoamError",
     "OpenFoamNotFoundError",

@@ -6,8 +6,11 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from . import runner
 from .errors import MeshQualityError, OpenFoamRunError
+from .foamio import read_faces, read_points
 
 _NUM = r"([-+]?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)"
 _NUMBERS = {
@@ -95,3 +98,49 @@ def check_mesh(case: Path, time: str | None = None, *, strict: bool = True) -> M
             "Fix: use a finer fluid.mesh_level, a smaller motion amplitude, or a larger tank."
         )
     return quality
+
+
+# checkMesh's face sets of a folded (not just a poor) mesh
+_FOLDED_SETS = ("wrongOrientedFaces", "zeroAreaFaces", "concaveFaces")
+
+
+def folded_mesh(case: Path, name: str) -> str | None:
+    """Why the moved mesh of time folder ``name`` cannot go on, from checkMesh: None when it
+    passes (or holds no moved mesh). Names the failed checks and where the folded faces lie
+    (their centres' bounding box, mm)."""
+    if not (case / name / "polyMesh" / "points").is_file():
+        return None
+    try:
+        quality = check_mesh(case, name, strict=False)
+    except MeshQualityError:
+        return None
+    sets = case / name / "polyMesh" / "sets"
+    labels: list[int] = []
+    for set_name in _FOLDED_SETS:
+        if not quality.ok and (sets / set_name).is_file():
+            labels += _set_labels(sets / set_name)
+    if not labels and quality.min_volume_m3 > 0:
+        return None  # poor (skewed, non-orthogonal) but whole
+    where = ""
+    if labels:
+        points = read_points(case / name / "polyMesh" / "points")
+        offsets, flat = read_faces(case / "constant" / "polyMesh" / "faces")
+        centres = np.array([points[flat[offsets[i] : offsets[i + 1]]].mean(axis=0) for i in labels])
+        low, high = 1e3 * centres.min(axis=0), 1e3 * centres.max(axis=0)
+        box = ", ".join(
+            f"{axis} {a:.0f}" if abs(b - a) < 0.5 else f"{axis} {a:.0f}..{b:.0f}"
+            for axis, a, b in zip("xyz", low, high, strict=True)
+        )
+        where = f": {len(labels)} faces inside out at {box} mm"
+    return (
+        f"the moved mesh of t={name} is folded{where} (min cell volume "
+        f"{quality.min_volume_m3:.3g} m3, log.checkMesh.{name}): the plate moved further than "
+        "the mesh motion follows"
+    )
+
+
+def _set_labels(path: Path) -> list[int]:
+    """Labels of an OpenFOAM set file: after its FoamFile header, a count and a list."""
+    body = path.read_text().split("}", 1)[-1]
+    found = re.search(r"(\d+)\s*\(([^)]*)\)", body)
+    return [int(v) for v in found.group(2).split()] if found else []

@@ -27,6 +27,10 @@ class MeshQualityError(OpenFoamError):
     """checkMesh failed on the generated (or moved) mesh."""
 
 
+class MeshFoldedError(MeshQualityError, ParticipantSetupError):
+    """The moved mesh has cells inside out: no iterate of the window can go on from it."""
+
+
 class DivergenceError(OpenFoamError):
     """The flow solution blew up: NaN, or residuals / Courant numbers beyond any sane bound."""
 

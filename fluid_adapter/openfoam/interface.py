@@ -39,8 +39,9 @@ class FluidInterface:
         return next(p for p in self.patches if p.name == name)
 
     def face_centres(self, displacement: NDArray | None = None) -> NDArray:
+        """OpenFOAM's face centres (see :func:`face_centroids`) of the moved faces."""
         pts = self.points0 if displacement is None else self.points0 + displacement
-        return pts[self.faces].mean(axis=1)
+        return face_centroids(pts, self.faces)
 
     def nodal_forces(self, face_forces: NDArray) -> NDArray:
         """Each face's force split equally among its points (sums to the total force)."""
@@ -50,6 +51,22 @@ class FluidInterface:
         for corner in range(faces.shape[1]):
             np.add.at(out, faces[:, corner], share)
         return out
+
+
+def face_centroids(points: NDArray, faces: NDArray) -> NDArray:
+    """Face centres as OpenFOAM computes them (``face::centre``): the area-weighted centroid of
+    the triangles fanned from the points' mean. On the graded peduncle's long thin faces that
+    is up to 0.9 mm from the points' mean, about a tenth of a face."""
+    corners = points[faces]  # (m, k, 3)
+    mean = corners.mean(axis=1, keepdims=True)
+    following = np.roll(corners, -1, axis=1)
+    area2 = np.linalg.norm(np.cross(corners - mean, following - mean), axis=2)  # (m, k)
+    centroid3 = corners + following + mean
+    total = area2.sum(axis=1)
+    found = total > 1e-300
+    out = mean[:, 0, :].copy()
+    out[found] = (area2[found, :, None] * centroid3[found]).sum(axis=1) / (3.0 * total[found, None])
+    return out
 
 
 def _patch_faces(faces_file: Path, start: int, count: int) -> list[NDArray[np.int64]]:

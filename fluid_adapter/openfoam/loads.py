@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 
 from .casefiles import SAMPLE_FO
 from .errors import OpenFoamRunError
-from .interface import FluidInterface
+from .interface import FluidInterface, face_centroids
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -104,7 +104,7 @@ def read_loads(
     for patch in interface.patches:
         p = read_raw(folder / f"p_{patch.name}.raw")
         tau = read_raw(folder / f"wallShearStress_{patch.name}.raw")[:, 3:6]
-        order = face_order(p[:, :3], points[patch.faces].mean(axis=1), folder / patch.name)
+        order = face_order(p[:, :3], face_centroids(points, patch.faces), folder / patch.name)
         p, tau = p[order], tau[order]
         s = area_vectors(points, patch.faces)
         centres.append(p[:, :3])

@@ -19,9 +19,9 @@ from numpy.typing import NDArray
 from fsi_orchestrator.case.schema import TimeScheme
 from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, State
 
-from .checkmesh import MeshQuality
+from .checkmesh import MeshQuality, folded_mesh
 from .drivers import PersistentDriver, RelaunchDriver
-from .errors import DriverError
+from .errors import DivergenceError, DriverError, MeshFoldedError
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
 from .slices import Surface, sample_slices
@@ -29,6 +29,9 @@ from .slices import Surface, sample_slices
 FACE_FORCE = "face_force"  # (m, 3) N
 FACE_CENTRES = "face_centres"  # (m, 3) m, moved mesh
 FACE_PRESSURE = "face_pressure"  # (m,) Pa
+# checkMesh of the moved mesh every this many windows (0.1 s on the coarse fish): a fold at the
+# fin's edge leaves pimpleFoam running on inside-out cells for windows before it blows up
+MESH_CHECK_WINDOWS = 10
 
 
 class OpenFoamParticipant:
@@ -51,6 +54,7 @@ class OpenFoamParticipant:
         self._displacement = np.zeros((n, 3))
         self._loads: SurfaceLoads | None = None
         self._checkpoint: tuple[NDArray, SurfaceLoads | None] | None = None
+        self._mesh_checked_at = 0  # the last window start whose moved mesh was checked
 
     @property
     def acceleration_stencil(self) -> tuple[float, ...]:
@@ -88,7 +92,37 @@ class OpenFoamParticipant:
         self._displacement = u.copy()
 
     def solve(self, dt: float) -> None:
-        self._loads = self.driver.advance(self._displacement, dt)
+        self._check_moved_mesh(dt)
+        try:
+            self._loads = self.driver.advance(self._displacement, dt)
+        except DivergenceError as exc:
+            folded = self._folded_mesh_now(dt)
+            if folded is None:
+                raise
+            raise MeshFoldedError(
+                f"pimpleFoam diverged in {self.run.path}: {folded}. A smaller drive or a "
+                "stiffer design keeps the mesh whole; case folder kept"
+            ) from exc
+
+    def _folded_mesh_now(self, dt: float) -> str | None:
+        """checkMesh's verdict on the window start's moved mesh (serial cases; None: whole)."""
+        if self.run.processes != 1:
+            return None
+        return folded_mesh(self.run.path, self.run.time_folder(self.time, dt))
+
+    def _check_moved_mesh(self, dt: float) -> None:
+        """Every MESH_CHECK_WINDOWS windows: stop on a folded mesh rather than pass on the
+        forces of inside-out cells (the windows before are kept)."""
+        window = int(round(self.time / dt))
+        if window <= 0 or window % MESH_CHECK_WINDOWS or window == self._mesh_checked_at:
+            return
+        self._mesh_checked_at = window
+        folded = self._folded_mesh_now(dt)
+        if folded is not None:
+            raise MeshFoldedError(
+                f"{self.run.path}: {folded}; its flow is wrong, so the run stops here. A "
+                "smaller drive or a stiffer design keeps the mesh whole"
+            )
 
     def follow(self, displacements: Sequence[NDArray], dt: float) -> list[NDArray]:
         """Prescribed motion (optional in the protocol; the coupling's lead-in): the next
