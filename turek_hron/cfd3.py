@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from fluid_adapter.openfoam import runner
 from fluid_adapter.openfoam.casefiles import (
     FORCES_FO,
+    TIME_PRECISION,
     FlowSettings,
     control_dict,
     fv_schemes,
@@ -162,6 +163,12 @@ def continue_cfd3(
         precursor, case, ignore=shutil.ignore_patterns("postProcessing", "log.*", "fvOptions")
     )
     last = numeric_dirs(case)[-1][1]
+    # a restart reads the folder timePrecision names, not the longer name OpenFOAM may have
+    # written when two steps' names clashed (2.999740477687203 -> 2.9997404776872)
+    named = f"{float(last):.{TIME_PRECISION}g}"
+    if named != last:
+        (case / last).rename(case / named)
+        last = named
     s = flow_settings(turbulence, max_courant)
     _write_system(case, s, start=float(last), end=float(last) + extra_time_s)
     for name, entries in _turbulence_fields(s).items():

@@ -45,6 +45,11 @@ class FlowSettings:
     motion_diffusivity: tuple = ("file", DIFFUSIVITY_FILE)
 
 
+# digits of a time folder's name (OpenFOAM adds digits on its own where two steps' names would
+# clash, and a restart then looks for the shorter name: turek_hron.cfd3.continue_cfd3)
+TIME_PRECISION = 15
+
+
 def control_dict(
     s: FlowSettings, *, start: float, end: float, dt: float, write_every: int = 1
 ) -> dict:
@@ -57,7 +62,7 @@ def control_dict(
         "writePrecision": 12,
         "writeCompression": False,
         "timeFormat": "general",
-        "timePrecision": 15,
+        "timePrecision": TIME_PRECISION,
         "runTimeModifiable": False,
         **window_controls(s, start=start, end=end, dt=dt, write_every=write_every),
     }
