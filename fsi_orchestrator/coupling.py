@@ -186,8 +186,7 @@ class Coupling:
         if self.accelerator is not None and iterate:
             self.accelerator.iterations_converged({FIELD: x}, {FIELD: x_tilde})
         self.predictor.record(t_end, {FIELD: x_tilde})
-        norm = float(np.linalg.norm(x_tilde))
-        self.failures.check_growth(norm, window, self.criteria.iteration)
+        self.failures.check_growth(x_tilde, window, self.criteria.iteration, iterated=iterate)
         self.force_scales = (self.force_scales + [self._force_norm])[-SCALE_MEMORY:]
         return self._report(status, iterate, misses)
 
@@ -262,6 +261,10 @@ class Coupling:
             "scheme": np.bytes_(str(self.settings.scheme)),
             "force_scales": np.array(self.force_scales),
             "norms": np.array(self.failures.norms),
+            "turns": np.array(self.failures.turns),
+            "last_force": (
+                np.array(self.failures.last) if self.failures.last is not None else np.zeros(0)
+            ),
             "prescribed_wall_s_per_window": self.prescribed_wall_s_per_window or np.nan,
             "lead_in_wall_s": self.lead_in_wall_s,
             "predictor": self.predictor.save_state(),
@@ -279,6 +282,9 @@ class Coupling:
         self.resumed_from_scheme = None if saved is self.settings.scheme else saved
         self.force_scales = [float(v) for v in np.atleast_1d(state["force_scales"])]
         self.failures.norms = [float(v) for v in np.atleast_1d(state["norms"])]
+        self.failures.turns = [float(v) for v in np.atleast_1d(state.get("turns", []))]
+        last = np.array(state.get("last_force", np.zeros(0)), dtype=float)  # older runs: none
+        self.failures.last = last if last.size else None
         prescribed = float(state.get("prescribed_wall_s_per_window", np.nan))  # older runs: none
         self.start_up.prescribed_wall_s_per_window = None if np.isnan(prescribed) else prescribed
         self.start_up.wall_s = float(state.get("lead_in_wall_s", 0.0))

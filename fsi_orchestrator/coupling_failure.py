@@ -1,6 +1,9 @@
 """The coupling's failure handling: an iterate a solver failed on is retried closer to the last
 good one, and a failure that persists, or a force that grows tenfold window after window, is
-reported as what it almost always is here, a diverging coupling (with a hint on the cure)."""
+reported as what it almost always is here, a diverging coupling (with a hint on the cure). So
+is a force that flips sign from window to window and grows: the added-mass instability of a
+window that is not iterated (explicit-am at 17-19 Hz ran into it and on to a floating point
+exception in the fluid)."""
 
 from __future__ import annotations
 
@@ -14,17 +17,25 @@ from .convergence import CouplingDivergenceError
 from .participant import ParticipantSetupError
 
 MAX_RETRIES = 3  # halvings of an iterate a solver failed on
+# a force that points against the last window's this many windows in a row, and grew by
+# FLIP_GROWTH over them, is unstable (the start-up's ringing flips too, but decays by ~0.6 a
+# window)
+FLIP_WINDOWS = 5
+FLIP_GROWTH = 2.0
 Iterate = NDArray[np.float64]
 
 
 class FailureHandling:
     """Retries and divergence detection of one coupling (scheme ``scheme``, iterating
-    ``field``). ``norms``: the exchanged force's norm at the last window ends (checkpointed);
-    ``retries``: the retried solves of the current window."""
+    ``field``). ``norms``: the exchanged force's norm at the last window ends, ``turns`` the
+    cosines between consecutive ones, ``last`` the last one (all checkpointed); ``retries``:
+    the retried solves of the current window."""
 
     def __init__(self, scheme: CouplingScheme, field: str) -> None:
         self.scheme, self.field = scheme, field
         self.norms: list[float] = []
+        self.turns: list[float] = []
+        self.last: Iterate | None = None
         self.retries = 0
 
     def guarded(
@@ -58,15 +69,44 @@ class FailureHandling:
                 restore()
         raise AssertionError("unreachable")
 
-    def check_growth(self, norm: float, window: int, iteration: int) -> None:
+    def check_growth(
+        self, force: Iterate, window: int, iteration: int, *, iterated: bool = True
+    ) -> None:
         """Window-to-window divergence (explicit schemes have no iterations to watch): the
-        force grew tenfold in each of three consecutive windows."""
-        self.norms = (self.norms + [norm])[-4:]
-        n = self.norms
+        window-end force grew tenfold in each of three consecutive windows, or, in windows that
+        are not iterated, flipped sign FLIP_WINDOWS times in a row while growing FLIP_GROWTH
+        times."""
+        norm = float(np.linalg.norm(force))
+        if self.last is not None:
+            scale = norm * float(np.linalg.norm(self.last))
+            turn = float(np.vdot(force, self.last)) / scale if scale > 0 else 1.0
+            self.turns = (self.turns + [turn])[-FLIP_WINDOWS:]
+        self.last = np.array(force, dtype=float, copy=True)
+        self.norms = (self.norms + [norm])[-(FLIP_WINDOWS + 1) :]
+        n = self.norms[-4:]
         if len(n) == 4 and n[0] > 0 and all(b > 10 * a for a, b in zip(n, n[1:], strict=False)):
             raise CouplingDivergenceError(
                 f"the interface force grew from {n[0]:.3g} to {n[-1]:.3g} N over three windows "
                 f"{self.hint()}",
+                field=self.field,
+                window=window,
+                iteration=iteration,
+            )
+        first = self.norms[0]
+        if (
+            not iterated
+            and len(self.turns) == FLIP_WINDOWS
+            and len(self.norms) == FLIP_WINDOWS + 1
+            and all(t < 0 for t in self.turns)
+            and first > 0
+            and norm >= FLIP_GROWTH * first
+        ):
+            raise CouplingDivergenceError(
+                f"the interface force flipped sign in each of the last {FLIP_WINDOWS} windows "
+                f"and grew from {first:.3g} to {norm:.3g} N: one fluid solve per window is "
+                f'unstable here (coupling.scheme = "{self.scheme}"); iterate the windows '
+                '(coupling.scheme = "iqn-ils-am" with coupling.explicit_periods = 0) or take '
+                "more time.steps_per_period",
                 field=self.field,
                 window=window,
                 iteration=iteration,
