@@ -108,7 +108,11 @@ class OpenFoamParticipant:
         """checkMesh's verdict on the window start's moved mesh (serial cases; None: whole)."""
         if self.run.processes != 1:
             return None
-        return folded_mesh(self.run.path, self.run.time_folder(self.time, dt))
+        try:
+            name = self.run.time_folder(self.time, dt)
+        except FileNotFoundError:  # nothing written at the window start: nothing to check
+            return None
+        return folded_mesh(self.run.path, name)
 
     def _check_moved_mesh(self, dt: float) -> None:
         """Every MESH_CHECK_WINDOWS windows: stop on a folded mesh rather than pass on the
