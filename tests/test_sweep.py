@@ -127,6 +127,72 @@ def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatc
     assert [r["status"] for r in rows] == ["ok (started from rest)"]
 
 
+def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
+    tmp_path, capsys, monkeypatch
+):
+    """One sweep spans the frequencies where one fluid solve per window is stable and those
+    where it is not (explicit-am on the coarse fish above 15 Hz): a point whose coupling
+    diverges is rerun with iterated windows, says so in its status, and a resumed sweep
+    continues it iterated."""
+    from fsi_orchestrator.case.schema import CouplingScheme
+    from fsi_orchestrator.convergence import CouplingDivergenceError
+
+    real = run_cli.run_dynamic
+    schemes = []
+
+    def unstable_at_8hz(case, output, **kwargs):
+        c = case.coupling
+        schemes.append((case.actuation.frequency_hz, c.scheme, c.explicit_periods))
+        if case.actuation.frequency_hz == 8.0 and not c.scheme.iterates:
+            raise CouplingDivergenceError(
+                "the interface force flipped sign", field="force", window=7, iteration=1
+            )
+        return real(case, output, **kwargs)
+
+    monkeypatch.setattr(run_cli, "run_dynamic", unstable_at_8hz)
+    out = tmp_path / "sweep"
+    args = [str(CASE), "--frequencies", "2,8", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
+    args += ["--set", "coupling.partitioned=true", "--set", "coupling.scheme=explicit-am"]
+    assert sweep_cli.main([*args, "--json", "--output", str(out)]) == 0
+    captured = capsys.readouterr()
+    rows = json.loads(captured.out)["rows"]
+    assert [r["status"] for r in rows] == ["ok", "ok (iterated windows)"]
+    assert np.isfinite(rows[1]["tip_amplitude_m"])
+    explicit, iqn = CouplingScheme.EXPLICIT_AM, CouplingScheme.IQN_ILS_AM
+    assert schemes == [(2.0, explicit, 0), (8.0, explicit, 0), (8.0, iqn, 0)]
+    assert "sine 8 Hz: coupling diverged" in captured.err
+    assert "again with iterated windows" in captured.err
+    assert (out / "sine_8Hz" / sweep_cli.ITERATED_MARK).is_file()
+    # killed after the rerun: --resume continues that point iterated, not explicit again
+    (out / "sweep_rows" / "sine_8Hz.json").unlink()
+    schemes.clear()
+    assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
+    assert schemes == [(8.0, iqn, 0)]
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["status"] for r in rows] == ["ok", "ok (iterated windows)"]
+
+
+def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():
+    from fsi_orchestrator.case.schema import CouplingScheme
+
+    case = load_case(CASE)  # potential flow, monolithic: nothing to iterate
+    assert sweep_cli.with_iterated_windows(case) is None
+    partitioned = load_case(CASE, ["coupling.partitioned=true", "coupling.scheme=iqn-ils-am"])
+    assert sweep_cli.with_iterated_windows(partitioned) is None
+    started = load_case(
+        CASE,
+        ["coupling.partitioned=true", "coupling.scheme=iqn-ils-am", "coupling.explicit_periods=1"],
+    )
+    rerun = sweep_cli.with_iterated_windows(started)
+    assert (rerun.coupling.scheme, rerun.coupling.explicit_periods) == (
+        CouplingScheme.IQN_ILS_AM,
+        0,
+    )
+    plain = load_case(CASE, ["coupling.partitioned=true", "coupling.scheme=explicit"])
+    assert sweep_cli.with_iterated_windows(plain).coupling.scheme is CouplingScheme.IQN_ILS_AM
+
+
 @pytest.mark.parametrize("text, expected", [("1:5:2", [1.0, 3.0, 5.0]), ("3,10", [3.0, 10.0])])
 def test_frequency_lists(text, expected):
     assert sweep_cli.parse_frequencies(text) == pytest.approx(expected)

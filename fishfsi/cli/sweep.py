@@ -18,6 +18,8 @@ killed transient point from its checkpoint (its run folder is ``OUTPUT/<waveform
 Without ``--resume`` a folder holding a sweep's results is refused (``--overwrite`` replaces
 them); ``--point K`` (an array task) is refused only by another case's sweep there or by its
 own point's row or run, not by its siblings' rows.
+A point whose windows of one fluid solve diverge (explicit-am at the coarse fish's high
+frequencies) is rerun with iterated windows (with_iterated_windows; its status says so).
 One line per finished point goes to stderr (``--quiet``: none).
 """
 
@@ -132,6 +134,7 @@ def transient_sweep(
     ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
     the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
     holds a checkpoint continues from it (fsi-run --resume)."""
+    from fsi_orchestrator.convergence import CouplingDivergenceError
     from fsi_orchestrator.loop import ResumeError
     from fsi_orchestrator.results import CHECKPOINT_FILE
     from solid_adapter.solvers import SolverError
@@ -142,6 +145,7 @@ def transient_sweep(
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     mine = []
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
+    learned_iterated = None  # the same, of the last point rerun with iterated windows
     for index in range(rank, len(jobs), size):
         waveform, f = jobs[index]
         folder = output / point_name(waveform, f)
@@ -149,8 +153,17 @@ def transient_sweep(
         if learned is not None:
             point = chained(point, learned)
         start = time.perf_counter()
+        iterated = with_iterated_windows(point)
+        if iterated is not None and learned_iterated is not None:
+            iterated = chained(iterated, learned_iterated)
+        if not resume:  # an earlier sweep's mark (--overwrite) says nothing of this run
+            (folder / ITERATED_MARK).unlink(missing_ok=True)
+        redone = False
+        if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
+            point, iterated, redone = iterated, None, True  # its run was already redone
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
             continued = resume and (folder / CHECKPOINT_FILE).is_file()
+            notes = []
             try:
                 summary = run_dynamic(point, folder, resume=continued, show_progress=False)
             except ResumeError as err:
@@ -158,7 +171,27 @@ def transient_sweep(
                     raise
                 print(f"note: {folder}: {err}; running the point afresh", file=sys.stderr)
                 summary = run_dynamic(point, folder, resume=False, show_progress=False)
-            status = "ok" if "start_from_rest" not in summary else "ok (started from rest)"
+            except CouplingDivergenceError as err:
+                if iterated is None:
+                    raise
+                # one solve per window is unstable at this point (explicit added-mass
+                # instability, or a solver failing on its growing force): iterate its windows
+                print(
+                    f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; running the "
+                    "point again with iterated windows (coupling.scheme = "
+                    f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0)',
+                    file=sys.stderr,
+                )
+                folder.mkdir(parents=True, exist_ok=True)
+                atomic_write(folder / ITERATED_MARK, f"{err}\n")
+                summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
+                redone = True
+            if redone:
+                notes.append("iterated windows")
+                learned_iterated = folder
+            if "start_from_rest" in summary:
+                notes.insert(0, "started from rest")
+            status = f"ok ({'; '.join(notes)})" if notes else "ok"
             learned = folder
         except (SolverError, RuntimeError) as err:
             summary, status = {}, f"failed: {err}".splitlines()[0]
@@ -200,6 +233,27 @@ def transient_sweep(
     if rank != 0:
         return []
     return [row for _, row in sorted(item for part in gathered for item in part)]
+
+
+ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
+
+
+def with_iterated_windows(case: Case) -> Case | None:
+    """The point's case with every window iterated to the coupling tolerance (iqn-ils-am, or
+    its own iterating scheme, with no explicit start-up periods); None where the case already
+    iterates every window or has no partitioned coupling to iterate. A sweep point whose
+    one-solve windows diverge (explicit-am on the coarse fish above 15 Hz) is rerun this way,
+    so one sweep spans the stable and the unstable frequencies."""
+    from fsi_orchestrator.case.schema import CouplingScheme
+
+    c = case.coupling
+    if case.fluid.model is not FluidModel.OPENFOAM and not c.partitioned:
+        return None
+    if c.scheme.iterates and c.explicit_periods == 0:
+        return None
+    scheme = c.scheme if c.scheme.iterates else CouplingScheme.IQN_ILS_AM
+    coupling = dataclasses.replace(c, scheme=scheme, explicit_periods=0)
+    return dataclasses.replace(case, coupling=coupling)
 
 
 def chained(case: Case, previous: Path) -> Case:
