@@ -34,6 +34,7 @@ def amplitude(key: str = "", value: float = 0.0) -> float:
     return linear_figures(load_case(STUDY.base_case, lines))["tip_amplitude_m"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "key, other, figure",
     [
@@ -48,6 +49,7 @@ def test_the_seeds_serial_choices_are_the_best_in_its_set_up(key, other, figure)
     assert amplitude() > amplitude(key, other), figure
 
 
+@pytest.mark.slow
 def test_the_peduncle_trend_is_monotonic_as_fig_5_5_draws_it():
     heights = (0.003, 0.012, 0.021, 0.030)
     tails = [amplitude("geometry.peduncle_height_m", h) for h in heights]

@@ -249,6 +249,57 @@ def test_a_run_does_not_end_as_periodic_during_its_explicit_start_up(tmp_path):
     assert said[31].startswith("periodic after 4 periods (time.periodic_tolerance = 0.01)")
 
 
+# the tail's mean position and swing per period [mm] of two coarse OpenFOAM runs with
+# explicit-am (fsi-sweep cases/fixed_head_3Hz --set fluid.mesh_level=coarse
+# --set coupling.scheme=explicit-am, 40 windows per period): the 3 Hz square wave's mean flips
+# and grows from period 3 on; the 5 Hz sine's settles (both measured on this machine)
+SQUARE_3HZ = ([-0.58, 1.26, 0.32, -1.71, 4.31, -5.31], [12.08, 13.97, 12.39, 12.80, 13.06, 15.22])
+SINE_5HZ = (
+    [0.36, 1.36, -0.77, -0.45, 0.42, 0.22, -0.11, -0.07],
+    [3.75, 4.38, 4.87, 5.03, 4.72, 4.77, 4.69, 4.71],
+)
+
+
+def replay(tmp_path, case, means, swings, per_period=8):
+    """Feed a tail history of the given per-period means and swings to the case's stop rules,
+    window by window; returns the window after which the growth check raised (None: never)."""
+    from fsi_orchestrator.convergence import CouplingDivergenceError
+
+    rule = run_cli.explicit_growth_check(case)
+    results = ResultsFile(tmp_path / "results.h5")
+    try:
+        for k, (mean, swing) in enumerate(zip(means, swings, strict=True)):
+            for j in range(per_period):
+                z = 1e-3 * (mean + swing * np.sin(2 * np.pi * (j + 0.5) / per_period))
+                results.append({"shell/tip_displacement_m": [0.0, 0.0, z]})
+                try:
+                    if rule is not None:
+                        rule(results)
+                except CouplingDivergenceError as err:
+                    assert "flipped sign in each of the last 3 periods" in str(err)
+                    assert "iqn-ils-am" in str(err)
+                    return k * per_period + j + 1
+    finally:
+        results.close()
+    return None
+
+
+@pytest.mark.parametrize(
+    "scheme, history, stops_after",
+    [
+        ("explicit-am", SQUARE_3HZ, 48),  # the end of period 6
+        ("explicit-am", SINE_5HZ, None),
+        ("iqn-ils-am", SQUARE_3HZ, None),  # iterated windows: the check does not apply
+    ],
+)
+def test_a_tail_mean_flipping_and_growing_over_periods_of_single_solves_stops_the_run(
+    tmp_path, scheme, history, stops_after
+):
+    sets = [f"coupling.scheme={scheme}", "time.periods=8", "time.steps_per_period=8"]
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz", sets)
+    assert replay(tmp_path, case, *history) == stops_after
+
+
 def test_an_output_folder_that_cannot_be_used_is_refused_before_the_set_up(tmp_path, capsys):
     """--output naming a file, or --resume where no checkpoint is: one line, before the
     structure (and any fluid) is built."""

@@ -127,6 +127,7 @@ def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatc
     assert [r["status"] for r in rows] == ["ok (started from rest)"]
 
 
+@pytest.mark.slow
 def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     tmp_path, capsys, monkeypatch
 ):
@@ -136,6 +137,8 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     continues it iterated."""
     from fsi_orchestrator.case.schema import CouplingScheme
     from fsi_orchestrator.convergence import CouplingDivergenceError
+    from fsi_orchestrator.loop import ResumeError
+    from fsi_orchestrator.results import CHECKPOINT_FILE
 
     real = run_cli.run_dynamic
     schemes = []
@@ -144,9 +147,14 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
         c = case.coupling
         schemes.append((case.actuation.frequency_hz, c.scheme, c.explicit_periods))
         if case.actuation.frequency_hz == 8.0 and not c.scheme.iterates:
+            if kwargs["resume"]:
+                raise ResumeError("the case changed")
+            real(case, output, **kwargs)  # its windows and checkpoint, then the divergence
             raise CouplingDivergenceError(
                 "the interface force flipped sign", field="force", window=7, iteration=1
             )
+        if case.actuation.frequency_hz == 8.0:  # the rerun never continues the explicit run
+            assert not (output / CHECKPOINT_FILE).exists() or kwargs["resume"]
         return real(case, output, **kwargs)
 
     monkeypatch.setattr(run_cli, "run_dynamic", unstable_at_8hz)
@@ -171,6 +179,15 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     assert schemes == [(8.0, iqn, 0)]
     rows = json.loads(capsys.readouterr().out)["rows"]
     assert [r["status"] for r in rows] == ["ok", "ok (iterated windows)"]
+    # killed in its explicit run: a checkpoint it cannot continue is run afresh, and when that
+    # diverges it is rerun iterated all the same
+    (out / "sweep_rows" / "sine_8Hz.json").unlink()
+    (out / "sine_8Hz" / sweep_cli.ITERATED_MARK).unlink()
+    assert (out / "sine_8Hz" / CHECKPOINT_FILE).is_file()
+    schemes.clear()
+    assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
+    assert schemes == [(8.0, explicit, 0), (8.0, explicit, 0), (8.0, iqn, 0)]
+    assert json.loads(capsys.readouterr().out)["rows"][1]["status"] == "ok (iterated windows)"
 
 
 def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():

@@ -104,6 +104,75 @@ def periodic_stop(case: Case) -> StopRule | None:
     return rule
 
 
+# the tail's mean position per period flipping sign this many periods in a row while growing
+# GROWTH_PERIOD_FACTOR times, in periods of one fluid solve per window, is the slow form of the
+# explicit added-mass instability (explicit-am, coarse fish, 3 Hz square wave: -1.7, +4.3,
+# -5.3 mm on a 13-15 mm swing). No sine or square run with iterated windows, and no explicit
+# sine run at 1-15 Hz, does it (sweeps of the coarse fish).
+FLIP_PERIODS = 3
+GROWTH_PERIOD_FACTOR = 2.0
+
+
+def explicit_growth_check(case: Case) -> StopRule | None:
+    """In the periods whose windows take one fluid solve (explicit schemes, the explicit
+    start-up periods), a CouplingDivergenceError when the tail's mean position per period
+    flips sign FLIP_PERIODS times in a row, grows GROWTH_PERIOD_FACTOR times over them and
+    ends above a tenth of the swing: the window-to-window check (coupling_failure) sees the
+    fast form of the instability; this sees the form that grows from period to period."""
+    from fsi_orchestrator.convergence import CouplingDivergenceError
+
+    if not is_coupled(case):
+        return None
+    c, n = case.coupling, windows_per_period(case)
+    explicit_rows = None if not c.scheme.iterates else c.explicit_periods * n
+    if explicit_rows == 0:
+        return None
+
+    def rule(results: ResultsFile) -> str | None:
+        rows = results.rows
+        if rows == 0 or rows % n or (explicit_rows is not None and rows > explicit_rows):
+            return None
+        tip = results.column("shell/tip_displacement_m")
+        assert tip is not None
+        periods = complete_periods(tip[:, 2], n)[-(FLIP_PERIODS + 1) :]
+        if len(periods) <= FLIP_PERIODS:
+            return None
+        means = [float(p.mean()) for p in periods]
+        swing = float(np.ptp(periods[-1]) / 2)
+        flips = all(a * b < 0 for a, b in pairwise(means))
+        grows = abs(means[-1]) >= GROWTH_PERIOD_FACTOR * abs(means[0])
+        if flips and grows and abs(means[-1]) > 0.1 * swing:
+            said = ", ".join(f"{1e3 * m:+.2f}" for m in means)
+            raise CouplingDivergenceError(
+                f"the tail's mean position flipped sign in each of the last {FLIP_PERIODS} "
+                f"periods and grew ({said} mm on a {1e3 * swing:.1f} mm swing): one fluid "
+                f'solve per window is unstable here (coupling.scheme = "{c.scheme}"); iterate '
+                'the windows (coupling.scheme = "iqn-ils-am" with coupling.explicit_periods = 0)',
+                field="force",
+                window=rows,
+                iteration=1,
+            )
+        return None
+
+    return rule
+
+
+def stop_rules(*rules: StopRule | None) -> StopRule | None:
+    """One rule asking each in turn; the first that says stop decides."""
+    active = [r for r in rules if r is not None]
+    if not active:
+        return None
+
+    def rule(results: ResultsFile) -> str | None:
+        for r in active:
+            said = r(results)
+            if said is not None:
+                return said
+        return None
+
+    return rule
+
+
 def dynamic_summary(case: Case, results_path: Path) -> dict:
     with h5py.File(results_path, "r") as h5:
         t = h5["time_s"][:, 0]
@@ -197,7 +266,13 @@ def run_dynamic(
     try:
         with progress.windows(schedule.n_windows) as on_window, StopRequest().on_sigterm() as stop:
             loop = WindowLoop(
-                solid, schedule, settings, on_window, coupling, periodic_stop(case), stop.__bool__
+                solid,
+                schedule,
+                settings,
+                on_window,
+                coupling,
+                stop_rules(explicit_growth_check(case), periodic_stop(case)),
+                stop.__bool__,
             )
             path = loop.run(resume=resume)
     finally:

@@ -134,12 +134,23 @@ def transient_sweep(
     ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
     the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
     holds a checkpoint continues from it (fsi-run --resume)."""
+    from fluid_adapter.openfoam.errors import MeshFoldedError
     from fsi_orchestrator.convergence import CouplingDivergenceError
     from fsi_orchestrator.loop import ResumeError
     from fsi_orchestrator.results import CHECKPOINT_FILE
     from solid_adapter.solvers import SolverError
 
     from .run import run_dynamic
+
+    def run_or_afresh(point: Case, folder: Path, continued: bool) -> dict:
+        """The point's run, continued from its checkpoint where asked and possible."""
+        try:
+            return run_dynamic(point, folder, resume=continued, show_progress=False)
+        except ResumeError as err:
+            if not continued:
+                raise
+            print(f"note: {folder}: {err}; running the point afresh", file=sys.stderr)
+            return run_dynamic(point, folder, resume=False, show_progress=False)
 
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
@@ -165,13 +176,8 @@ def transient_sweep(
             continued = resume and (folder / CHECKPOINT_FILE).is_file()
             notes = []
             try:
-                summary = run_dynamic(point, folder, resume=continued, show_progress=False)
-            except ResumeError as err:
-                if not continued:
-                    raise
-                print(f"note: {folder}: {err}; running the point afresh", file=sys.stderr)
-                summary = run_dynamic(point, folder, resume=False, show_progress=False)
-            except CouplingDivergenceError as err:
+                summary = run_or_afresh(point, folder, continued)
+            except (CouplingDivergenceError, MeshFoldedError) as err:
                 if iterated is None:
                     raise
                 # one solve per window is unstable at this point (explicit added-mass
@@ -183,6 +189,8 @@ def transient_sweep(
                     file=sys.stderr,
                 )
                 folder.mkdir(parents=True, exist_ok=True)
+                # the explicit run's checkpoint must not be continued as the rerun's
+                (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
                 atomic_write(folder / ITERATED_MARK, f"{err}\n")
                 summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
                 redone = True
