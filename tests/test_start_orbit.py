@@ -7,6 +7,7 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from fsi_orchestrator.start_orbit import LeadInSamples, fit_modal_force
 
@@ -242,3 +243,32 @@ def test_a_run_whose_fast_orbit_outruns_the_cfd_starts_from_rest():
     assert ramped.coupling.settings.lead_in_windows == 0
     at_rest = ramped.solid.state.v.reshape(-1, NDOF)
     assert np.all(at_rest == 0)
+
+
+@pytest.mark.slow
+def test_a_lead_in_that_turns_the_plate_past_the_mesh_motion_starts_from_rest():
+    """The free integrative robot (0.1 mm core, 3 mm peduncle) is driven near its first wet
+    mode: its undamped fast orbit, capped at 40 mm, turns the midline by 55 deg, where the
+    shipped mesh motion fails (benchmarks/mesh_rotation.py), and pimpleFoam blew up in the
+    lead-in at t = 0.242 s. It starts from rest (then it couples: 4.1 mm, 4.8 fluid solves per
+    window, coarse). The main job's scene turns it by 13 deg and is run as given."""
+    from fishfsi.cli.compose import (
+        LEAD_IN_MAX_TURN_DEG,
+        added_mass_for_preconditioning,
+        choose_start,
+    )
+    from fsi_orchestrator.case.loader import load_case
+    from solid_adapter.build import build_shell_model, build_shell_participant
+
+    def start(folder, sets):
+        case = load_case(ROOT / folder, ["fluid.mesh_level=coarse", *sets])
+        model = build_shell_model(case)
+        model.set_added_mass(added_mass_for_preconditioning(case, model).matrix)
+        return choose_start(case, build_shell_participant(case, model))
+
+    free, note = start("cases/seed/integrative_prototype", ["fluid.model=openfoam"])
+    assert note is not None and "turns the plate by 55 deg" in note
+    assert f"({LEAD_IN_MAX_TURN_DEG:g} deg" in note
+    assert free.actuation.ramp_periods == 1
+    as_given, note = start("cases/fixed_head_3Hz", [])
+    assert note is None and as_given.actuation.ramp_periods == 0

@@ -146,13 +146,39 @@ def ramped_start(case: Case) -> Case:
     )
 
 
+# the most the lead-in may turn the plate's midline (degrees): the shipped mesh motion fails
+# checkMesh from 55 deg of fin rotation (benchmarks/mesh_rotation.py), and the free
+# integrative robot's lead-in, turning it 55 deg, blew pimpleFoam up at t = 0.242 s
+LEAD_IN_MAX_TURN_DEG = 50.0
+
+
+def lead_in_turn_deg(motion, times: list[float], nodes) -> float:
+    """The steepest the lead-in turns the plate's midline (the row of nodes nearest its mean
+    y) over one period of ``motion``, in degrees, after the lead-in's amplitude cap."""
+    from fsi_orchestrator.lead_in import LEAD_IN_MAX_AMPLITUDE_M
+
+    path = [motion(t) for t in times]
+    peak = max(float(np.max(np.abs(u))) for u in path)
+    scale = min(1.0, LEAD_IN_MAX_AMPLITUDE_M / peak) if peak > 0 else 1.0
+    y = nodes[:, 1]
+    row = np.flatnonzero(np.isclose(y, y[np.argmin(np.abs(y - y.mean()))]))
+    row = row[np.argsort(nodes[row, 0])]
+    slopes = [
+        np.abs(np.diff(scale * u[row, 2]) / np.diff(nodes[row, 0] + scale * u[row, 0]))
+        for u in path
+    ]
+    return float(np.degrees(np.arctan(max(float(s.max()) for s in slopes))))
+
+
 def choose_start(case: Case, solid) -> tuple[Case, str | None]:
     """The periodic start leads the CFD onto the fast model's orbit (Coupling.lead_in). That
     orbit has no fluid damping: near a wet resonance (20-28 Hz for the clamped fish) it moves
     the plate faster than the lead-in lets the CFD follow (lead_in.LEAD_IN_MAX_SPEED_M_S),
     and at 25 Hz the orbit corrected from the capped lead-in started the plate where its
-    first coupled window never converged (docs/coupling.md). Such a run starts from rest with
-    a voltage ramp instead. Returns (the case as run, why it changed or None)."""
+    first coupled window never converged (docs/coupling.md); near the free integrative
+    robot's first mode it turns the thin fin further than the mesh motion follows
+    (LEAD_IN_MAX_TURN_DEG). Such a run starts from rest with a voltage ramp instead. Returns
+    (the case as run, why it changed or None)."""
     from fsi_orchestrator.case.timing import windows_per_period
     from fsi_orchestrator.lead_in import LEAD_IN_MAX_SPEED_M_S, peak_speed
 
@@ -160,16 +186,24 @@ def choose_start(case: Case, solid) -> tuple[Case, str | None]:
     if motion is None:
         return case, None
     n, period = windows_per_period(case), 1.0 / case.actuation.frequency_hz
-    speed = peak_speed(motion, [k * period / n for k in range(n + 1)])
-    if speed <= LEAD_IN_MAX_SPEED_M_S:
+    times = [k * period / n for k in range(n + 1)]
+    speed = peak_speed(motion, times)
+    turn = lead_in_turn_deg(motion, times, solid.model.mesh.nodes)
+    if speed <= LEAD_IN_MAX_SPEED_M_S and turn <= LEAD_IN_MAX_TURN_DEG:
         return case, None
     ramped = ramped_start(case)
+    why = (
+        f"moves the plate at {speed:.2g} m/s, faster than the CFD lead-in follows "
+        f"({LEAD_IN_MAX_SPEED_M_S:g} m/s"
+        if speed > LEAD_IN_MAX_SPEED_M_S
+        else f"turns the plate by {turn:.0f} deg, further than the fluid mesh follows "
+        f"({LEAD_IN_MAX_TURN_DEG:g} deg"
+    )
     note = (
-        f"start: the fast model's periodic orbit moves the plate at {speed:.2g} m/s, faster "
-        f"than the CFD lead-in follows ({LEAD_IN_MAX_SPEED_M_S:g} m/s: near a wet resonance "
-        f"its amplitude is set by damping it does not know); starting from rest instead, the "
-        f"voltage ramped up over {RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods "
-        f"in all ({case.time.periods:g} asked for)"
+        f"start: the fast model's periodic orbit {why}: near a wet resonance its amplitude is "
+        f"set by damping it does not know); starting from rest instead, the voltage ramped up "
+        f"over {RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods in all "
+        f"({case.time.periods:g} asked for)"
     )
     return ramped, note
 
