@@ -18,8 +18,9 @@ killed transient point from its checkpoint (its run folder is ``OUTPUT/<waveform
 Without ``--resume`` a folder holding a sweep's results is refused (``--overwrite`` replaces
 them); ``--point K`` (an array task) is refused only by another case's sweep there or by its
 own point's row or run, not by its siblings' rows.
-A point whose windows of one fluid solve diverge (explicit-am at the coarse fish's high
-frequencies) is rerun with iterated windows (with_iterated_windows; its status says so).
+A point whose windows of one fluid solve diverge (explicit-am on the coarse fish: a sine above
+15 Hz, a square wave's steps) is rerun with iterated windows (with_iterated_windows; its
+status says so).
 One line per finished point goes to stderr (``--quiet``: none).
 """
 
