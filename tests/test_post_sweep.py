@@ -105,15 +105,19 @@ def _rows(points):
 def test_fsi_post_draws_the_mesh_reference_and_lists_both_errors(tmp_path, capsys):
     default = json.loads(json.dumps(OPENFOAM_COARSE))
     default["case"]["fluid"]["mesh_level"] = "default"
-    _write_sweep(
-        tmp_path / "coarse", _rows([(3, 0.008, 0.014), (5, 0.005, 0.011)]), OPENFOAM_COARSE
-    )
+    coarse = _rows([(3, 0.008, 0.014), (5, 0.005, 0.011), (7, float("nan"), float("nan"))])
+    for row, status in zip(coarse, ("ok", "ok", "failed: coupling diverged"), strict=True):
+        row["status"] = status
+        row["slender_body_mean_thrust_n"] = row["mean_thrust_n"]  # as fsi-sweep writes it
+    _write_sweep(tmp_path / "coarse", coarse, OPENFOAM_COARSE)
     _write_sweep(tmp_path / "default", _rows([(3, 0.0079, 0.0133)]), default)
     code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / "default")])
     assert code == 0
     with open(tmp_path / "coarse" / "sweep_errors.csv", newline="") as fh:
         table = list(csv.DictReader(fh))
-    assert [r["mesh_error"] for r in table] == ["measured", "interpolated"]
+    assert [r["mesh_error"] for r in table] == ["measured", "interpolated", "interpolated"]
+    # a failed point's NaN row says why
+    assert [r["status"] for r in table] == ["ok", "ok", "failed: coupling diverged"]
     assert float(table[0]["mean_thrust_mesh_error_mn"]) == pytest.approx(0.7)
     # 5 Hz holds 3 Hz's relative difference, -5 %
     assert float(table[1]["mean_thrust_mesh_error_mn"]) == pytest.approx(0.55)

@@ -210,6 +210,8 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
                     "mean_thrust_periodic_uncertainty_mn": thrust_err[i],
                     "mean_thrust_mesh_error_mn": thrust_mesh[i],
                     "mesh_error": "measured" if measured[i] else "interpolated",
+                    # a failed point's NaN says why
+                    "status": sel[i].get("status", ""),
                 }
             )
     ax_amp.set_ylabel("tail-tip amplitude [mm]")
