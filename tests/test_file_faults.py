@@ -343,6 +343,26 @@ def test_results_record_what_made_them(tmp_path, capsys):
     assert newton["units"] == "1" and "cumulative" in newton["description"]
 
 
+def test_a_case_that_a_sweep_made_with_numpy_numbers_is_written_as_toml_that_loads_back(tmp_path):
+    """A sweep's frequencies come from numpy (``--frequencies 1:25:2``): the resolved case
+    written into results.h5 held ``frequency_hz = np.float64(1.0)``, which no TOML reader
+    takes, so fsi-post could not read the drive's period back."""
+    import dataclasses
+
+    from fsi_orchestrator.provenance import case_toml
+
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz")
+    swept = dataclasses.replace(
+        case,
+        actuation=dataclasses.replace(case.actuation, frequency_hz=np.float64(7.0)),
+        time=dataclasses.replace(case.time, periods=np.float64(2.0)),
+    )
+    text = case_toml(swept)
+    assert tomllib.loads(text)["actuation"]["frequency_hz"] == 7.0
+    (tmp_path / "case.toml").write_text(text)
+    assert case_dict(load_case(tmp_path)) == case_dict(swept)
+
+
 def test_results_can_be_read_by_another_process_while_the_run_writes(tmp_path):
     """The writer takes no HDF5 file lock and flushes every window: a reader in another
     process (default h5py settings) sees the rows written so far."""

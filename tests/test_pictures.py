@@ -122,3 +122,22 @@ def test_the_les_wake_case_is_the_seeds_scene_with_twenty_frames_a_period():
     assert case.actuation.frequency_hz == 10.0
     assert case.fluid.turbulence is Turbulence.SMAGORINSKY
     assert case.time.steps_per_period / case.output.flow_every == 20
+
+
+@pytest.mark.parametrize(
+    "line, period",
+    [
+        ("frequency_hz = 7.0", 1 / 7),
+        ("# frequency_hz = 3.0  (default)", 1 / 3),  # a key at its default is a comment
+        ("frequency_hz = np.float64(5.0)", 1 / 5),  # what sweeps wrote before the fix
+    ],
+)
+def test_the_pictures_period_is_the_drives_from_the_recorded_case(tmp_path, line, period):
+    """The animation spans the last drive period, read from results.h5's resolved case."""
+    import h5py
+
+    from fishfsi.cli.post import drive_period_s
+
+    with h5py.File(tmp_path / "results.h5", "w") as h5:
+        h5.attrs["case_toml"] = f'[actuation]\n{line}\n# waveform = "sine"  (default)\n'
+    assert drive_period_s(tmp_path / "results.h5") == pytest.approx(period)

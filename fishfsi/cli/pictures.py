@@ -69,7 +69,10 @@ def draw(vtk: Path, output: Path, period_s: float | None) -> list[Path]:
     """fish3d.png and period.gif from the flow surfaces under ``vtk``; [] where there are
     none (a run without OpenFOAM, or output.flow_every = 0)."""
     import pyvista as pv
+    from vtkmodules.vtkCommonCore import vtkLogger
 
+    # without a display VTK warns "bad X server connection" and renders off-screen anyway
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     found = frames(vtk)
     if not found:
         return []

@@ -17,6 +17,7 @@ import argparse
 import copy
 import csv
 import json
+import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -314,7 +315,13 @@ def drive_period_s(results: Path) -> float | None:
         text = h5.attrs.get("case_toml")
     if text is None:
         return None
-    frequency = tomllib.loads(str(text)).get("actuation", {}).get("frequency_hz")
+    # results written before 2026-12-03 by a sweep over numpy frequencies hold
+    # "frequency_hz = np.float64(7.0)", which is not TOML
+    text = re.sub(r"np\.float64\(([^()]*)\)", r"\1", str(text))
+    frequency = tomllib.loads(text).get("actuation", {}).get("frequency_hz")
+    if frequency is None:  # at its default the key is written as a comment
+        found = re.search(r"^# frequency_hz = (\S+)  \(default\)$", text, re.MULTILINE)
+        frequency = float(found.group(1)) if found else None
     return 1.0 / float(frequency) if frequency else None
 
 

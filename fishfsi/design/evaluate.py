@@ -313,8 +313,10 @@ _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 def toml_value(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)
+    if isinstance(value, int):
+        return str(int(value))
+    if isinstance(value, float):  # numpy's float64 too: its repr is not TOML
+        return repr(float(value))
     if isinstance(value, str):
         return json.dumps(value)  # a TOML basic string for every printable text
     if isinstance(value, list | tuple):
