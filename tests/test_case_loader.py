@@ -33,8 +33,13 @@ def test_negative_frequency_names_the_key(tmp_path):
     assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
 
 
-def test_override_is_validated_like_the_file(tmp_path):
+def test_override_is_validated_like_the_file_and_named_as_the_set(tmp_path):
     msg = error_of(tmp_path, "", ["actuation.frequency_hz=-3"])
+    assert msg == "--set 'actuation.frequency_hz=-3': actuation.frequency_hz must be > 0, got -3"
+    msg = error_of(tmp_path, "[actuation]\nfrequency_hz = 3\n", ["fluid.modle=potential"])
+    assert msg.startswith("--set 'fluid.modle=potential': fluid.modle is not a known key")
+    # the file's own key is still the file's, whatever else --set gives
+    msg = error_of(tmp_path, "[actuation]\nfrequency_hz = -3\n", ["fluid.model=potential"])
     assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
 
 
@@ -73,6 +78,10 @@ def test_override_is_validated_like_the_file(tmp_path):
             'coupling.jacobian_from applies to coupling.scheme = "iqn-ils-am" only',
         ),
         ('[fluid]\nmodel = "lbm"\n', "fluid.model must be one of"),
+        (
+            '[geometry]\nkind = "beam"\n[boundary]\nhead = "elastic"\n',
+            'boundary.head = "elastic" is the fish\'s head on springs; for geometry.kind = "beam"',
+        ),
         ("[analysis\nkind = 1\n", "not valid TOML"),
     ],
 )
@@ -120,6 +129,14 @@ def test_cli_bad_input_exits_2_with_one_line(tmp_path, capsys):
     assert run_cli.main([str(tmp_path), "--json"]) == 2
     err = capsys.readouterr().err.strip()
     assert err == "error: case.toml: actuation.frequency_hz must be > 0, got -3"
+
+
+def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
+    write_case(tmp_path, "[actuation]\nfrequency_hz = 3\n")
+    with pytest.raises(SystemExit) as exit_:
+        run_cli.main([str(tmp_path), "--resume", "--overwrite"])
+    assert exit_.value.code == 2
+    assert "--overwrite: not allowed with argument --resume" in capsys.readouterr().err
 
 
 def test_console_script_prints_no_traceback(tmp_path):

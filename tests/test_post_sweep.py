@@ -139,3 +139,38 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
         assert code == 2 and says in err and len(err.splitlines()) == 1
     code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / "nowhere")])
     assert code == 2 and "--mesh-reference" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "table, expected",
+    [
+        ("", "sweep.csv: no rows; run fsi-sweep into that folder (again)"),
+        (
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,abc1.0,0.01,ok\n",
+            "sweep.csv, line 2: frequency_hz = 'abc1.0' is not a number",
+        ),
+    ],
+)
+def test_a_damaged_sweep_table_is_refused_in_one_line(tmp_path, capsys, table, expected):
+    (tmp_path / "sweep.csv").write_text(table)
+    assert post.main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"error: {tmp_path / expected}"
+    assert not (tmp_path / "sweep.png").exists()
+
+
+def test_an_output_that_cannot_be_a_folder_is_refused_in_one_line(tmp_path, capsys):
+    (tmp_path / "sweep.csv").write_text("waveform,frequency_hz,tip_amplitude_m\nsine,3,0.01\n")
+    (tmp_path / "afile").write_text("")
+    for output in (tmp_path / "afile", tmp_path / "afile" / "sub"):
+        assert post.main([str(tmp_path), "--output", str(output)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"error: --output {output}: cannot write there (") and "\n" not in err
+
+
+def test_a_missing_path_and_a_mesh_reference_to_a_run_are_refused_in_one_line(tmp_path, capsys):
+    assert post.main([str(tmp_path / "nowhere")]) == 2
+    assert capsys.readouterr().err.strip().endswith("nowhere: no such file or folder")
+    (tmp_path / "results.h5").write_text("")
+    assert post.main([str(tmp_path), "--mesh-reference", str(tmp_path)]) == 2
+    assert "--mesh-reference applies to a sweep's sweep.csv" in capsys.readouterr().err

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -219,6 +220,40 @@ def test_frequency_lists(text, expected):
 def test_a_bad_frequency_list_is_refused_in_one_line(text):
     with pytest.raises(CaseError, match=r"--frequencies .*: use start:stop:step or a,b,c"):
         sweep_cli.parse_frequencies(text)
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("3,3", "3 Hz is given twice"),
+        ("24.748743466977366,24.7487", "24.7487 Hz is given as 24.748743466977366 and 24.7487"),
+        ("1:2:0.0000001", "more than 1000 points in one sweep (check the step)"),
+    ],
+)
+def test_frequencies_that_name_one_point_twice_or_too_many_are_refused(text, expected):
+    """A point's folder and row are named by its frequency to 6 digits: two such frequencies
+    would share them (the table printed 2 rows, sweep.csv kept 1)."""
+    with pytest.raises(CaseError, match=re.escape(f"--frequencies {text!r}: {expected}")):
+        sweep_cli.parse_frequencies(text)
+
+
+def test_frequencies_are_plain_floats():
+    assert all(type(f) is float for f in sweep_cli.parse_frequencies("1:25:2"))
+
+
+@pytest.mark.parametrize(
+    "case, argv, expected",
+    [
+        ("cases/seed/beam_sweep", ["--waveforms", "sine,sine"], "a waveform is given twice"),
+        ("cases/rectangle_tip_force", [], 'geometry.kind = "rectangle" carries no actuators'),
+    ],
+)
+def test_a_sweep_of_nothing_new_is_refused_in_one_line(tmp_path, capsys, case, argv, expected):
+    args = [str(ROOT / case), "--frequencies", "3", "--output", str(tmp_path / "s"), *argv]
+    assert sweep_cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and expected in err
+    assert not (tmp_path / "s" / "sweep.csv").exists()
 
 
 def test_the_linear_sweep_oscillates_about_the_mean_voltage_equilibrium(tmp_path):

@@ -85,10 +85,29 @@ class PostError(ValueError):
     """Input fsi-post cannot draw, said in one line."""
 
 
+SWEEP_COLUMNS = ("waveform", "frequency_hz", "tip_amplitude_m")  # every sweep writes these
+TEXT_COLUMNS = ("waveform", "status", "thrust_source", "periodic")
+
+
 def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
     """A sweep's rows and what was swept (``sweep_case.json``; None when absent)."""
     with open(csv_path, newline="") as table:
         rows = list(csv.DictReader(table))
+    if not rows:
+        raise PostError(f"{csv_path}: no rows; run fsi-sweep into that folder (again)")
+    missing = [c for c in SWEEP_COLUMNS if c not in rows[0]]
+    if missing:
+        raise PostError(f"{csv_path}: not a table fsi-sweep wrote (no column {missing[0]!r})")
+    for line, row in enumerate(rows, start=2):  # line 1 is the header
+        for key, text in row.items():
+            if key in TEXT_COLUMNS or not text:
+                continue
+            try:
+                float(text)
+            except (TypeError, ValueError):
+                raise PostError(
+                    f"{csv_path}, line {line}: {key} = {text!r} is not a number"
+                ) from None
     identity = None
     if (csv_path.parent / "sweep_case.json").is_file():
         try:
@@ -350,10 +369,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     found = next((c for c in candidates if c.is_file()), None)
     if found is None:
-        print(f"error: {path}: no sweep.csv or results.h5 there", file=sys.stderr)
+        why = "no sweep.csv or results.h5 there" if path.exists() else "no such file or folder"
+        print(f"error: {path}: {why}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if args.mesh_reference and found.suffix != ".csv":
+        print(
+            f"error: --mesh-reference applies to a sweep's sweep.csv, not to the run {found}",
+            file=sys.stderr,
+        )
         return EXIT_BAD_INPUT
     output = Path(args.output) if args.output else found.parent
-    output.mkdir(parents=True, exist_ok=True)
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        print(f"error: --output {output}: cannot write there ({err.strerror})", file=sys.stderr)
+        return EXIT_BAD_INPUT
     try:
         if found.suffix == ".csv":
             reference = None
@@ -382,8 +412,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except (KeyError, ValueError, OSError) as err:  # not what fsi-run / fsi-sweep write
+        why = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
         print(
-            f"error: {found}: not a table fsi-run or fsi-sweep wrote ({err!r}); "
+            f"error: {found}: not a table fsi-run or fsi-sweep wrote ({why}); "
             "point fsi-post at a run's output folder or a sweep's sweep.csv",
             file=sys.stderr,
         )

@@ -516,10 +516,11 @@ def _body(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-run", "Run a case: structure alone or coupled with a fluid.")
     parser.add_argument("--output", help="output folder (default: CASE/output)")
-    parser.add_argument(
+    earlier = parser.add_mutually_exclusive_group()
+    earlier.add_argument(
         "--resume", action="store_true", help="continue a killed run from its last checkpoint"
     )
-    parser.add_argument(
+    earlier.add_argument(
         "--overwrite",
         action="store_true",
         help="replace the run an existing --output holds (without it, such a folder is refused)",

@@ -43,7 +43,7 @@ import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.params import coerce, spec_of
-from fsi_orchestrator.case.schema import Actuation, FluidModel, Waveform
+from fsi_orchestrator.case.schema import Actuation, FluidModel, GeometryKind, Waveform
 
 from .common import (
     EXIT_BAD_INPUT,
@@ -70,6 +70,8 @@ SWEEP_CASE_FILE = "sweep_case.json"  # what was swept: --resume refuses another 
 # a launcher's task count: Open MPI's mpirun, MPICH/Intel MPI (Hydra, PMI), SLURM's srun step
 LAUNCHER_TASKS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS")
 
+MAX_POINTS = 1000  # frequencies in one sweep
+
 PERIODIC_KEYS = (
     "tip_amplitude_periodic_m",
     "tip_amplitude_periodic_uncertainty_m",
@@ -86,13 +88,27 @@ def parse_frequencies(text: str) -> list[float]:
             start, stop, step = (float(v) for v in text.split(":"))
             if not step > 0:
                 raise ValueError
-            frequencies = list(np.arange(start, stop + 0.5 * step, step))
+            if (stop - start) / step + 1 > MAX_POINTS:  # a mistyped step: before np.arange
+                frequencies = [start] * (MAX_POINTS + 1)
+            else:
+                frequencies = [float(f) for f in np.arange(start, stop + 0.5 * step, step)]
         else:
             frequencies = [float(v) for v in text.split(",")]
     except ValueError:
         raise CaseError(usage) from None
     if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
         raise CaseError(usage)
+    if len(frequencies) > MAX_POINTS:
+        raise CaseError(
+            f"--frequencies {text!r}: more than {MAX_POINTS} points in one sweep (check the step)"
+        )
+    seen: dict[str, float] = {}
+    for f in frequencies:  # a point's folder and row are named by f to 6 digits
+        name = f"{f:g}"
+        if name in seen:
+            same = "twice" if seen[name] == f else f"as {seen[name]!r} and {f!r} (the same point)"
+            raise CaseError(f"--frequencies {text!r}: {name} Hz is given {same}")
+        seen[name] = f
     field = next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz")
     for f in frequencies:  # each point is a case: the key's own range holds
         try:
@@ -633,6 +649,11 @@ def _sweep(args: argparse.Namespace) -> int:
     comm = mpi_world()  # first: a mismatched launch stops before any work
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     case = load(args)
+    if case.geometry.kind is GeometryKind.RECTANGLE:
+        raise CaseError(
+            'case.toml: geometry.kind = "rectangle" carries no actuators for fsi-sweep to drive; '
+            'sweep a "fish" or "beam" case'
+        )
     frequencies = parse_frequencies(args.frequencies)
     names = "sine,square" if args.waveforms.strip() == "both" else args.waveforms
     try:
@@ -641,6 +662,8 @@ def _sweep(args: argparse.Namespace) -> int:
         raise CaseError(
             f"--waveforms {args.waveforms!r}: use sine, square, sine,square or both"
         ) from None
+    if len(set(waveforms)) < len(waveforms):
+        raise CaseError(f"--waveforms {args.waveforms!r}: a waveform is given twice")
     frequencies, waveforms = select_point(frequencies, waveforms, args.point)
     output = Path(args.output) if args.output else case.directory / "output" / "sweep"
     start = time.perf_counter()

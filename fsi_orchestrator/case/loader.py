@@ -99,7 +99,23 @@ def load_case(
             f"{CASE_FILE} is empty ({path}): give at least one key (to run every default on "
             f'purpose, e.g. [case] title = "defaults"); keys and defaults: docs/case_format.md'
         )
-    return case_from_dict(merge_overrides(raw, overrides), directory)
+    merged = merge_overrides(raw, overrides)
+    try:
+        return case_from_dict(merged, directory)
+    except CaseError as err:
+        raise CaseError(_blame_override(str(err), overrides)) from None
+
+
+def _blame_override(message: str, overrides: list[str]) -> str:
+    """A message about a key that --set gave names the --set, not the file: "case.toml:
+    actuation.frequency_hz must be > 0" -> "--set 'actuation.frequency_hz=-3': must be > 0"."""
+    prefix = f"{CASE_FILE}: "
+    if not message.startswith(prefix):
+        return message
+    body = message[len(prefix) :]
+    key = body.split(maxsplit=1)[0].rstrip(":") if body.strip() else ""
+    given = [o for o in overrides if o.split("=", 1)[0].strip() == key]
+    return f"--set {given[-1]!r}: {body}" if given else message
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -182,6 +198,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 raise CaseError(f'material.{key} is required for geometry.kind = "rectangle"')
         if case.material.cfrp is not None:
             raise CaseError('material.cfrp does not apply to geometry.kind = "rectangle"')
+    if g.kind is not GeometryKind.FISH and case.boundary.head.value == "elastic":
+        raise CaseError(
+            f'boundary.head = "elastic" is the fish\'s head on springs; for geometry.kind = '
+            f'"{g.kind}" use "clamped" or "free" (the x = 0 edge)'
+        )
     a = case.actuation
     lo, hi = MFC_VOLTAGE_RANGE_V
     for key in ("left_volts", "right_volts", "static_volts"):
