@@ -88,20 +88,22 @@ def parse_frequencies(text: str) -> list[float]:
             start, stop, step = (float(v) for v in text.split(":"))
             if not step > 0:
                 raise ValueError
-            if (stop - start) / step + 1 > MAX_POINTS:  # a mistyped step: before np.arange
-                frequencies = [start] * (MAX_POINTS + 1)
-            else:
-                frequencies = [float(f) for f in np.arange(start, stop + 0.5 * step, step)]
+            count = (stop - start) / step + 1
+            frequencies = (
+                [] if count > MAX_POINTS else list(np.arange(start, stop + step / 2, step))
+            )
         else:
+            count = text.count(",") + 1
             frequencies = [float(v) for v in text.split(",")]
     except ValueError:
         raise CaseError(usage) from None
-    if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
-        raise CaseError(usage)
-    if len(frequencies) > MAX_POINTS:
+    if count > MAX_POINTS:  # a mistyped step: refused before np.arange builds it
         raise CaseError(
             f"--frequencies {text!r}: more than {MAX_POINTS} points in one sweep (check the step)"
         )
+    frequencies = [float(f) for f in frequencies]  # not numpy's: they go into TOML and JSON
+    if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
+        raise CaseError(usage)
     seen: dict[str, float] = {}
     for f in frequencies:  # a point's folder and row are named by f to 6 digits
         name = f"{f:g}"

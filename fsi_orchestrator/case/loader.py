@@ -108,7 +108,8 @@ def load_case(
 
 def _blame_override(message: str, overrides: list[str]) -> str:
     """A message about a key that --set gave names the --set, not the file: "case.toml:
-    actuation.frequency_hz must be > 0" -> "--set 'actuation.frequency_hz=-3': must be > 0"."""
+    actuation.frequency_hz must be > 0, ..." -> "--set 'actuation.frequency_hz=-3':
+    actuation.frequency_hz must be > 0, ..."."""
     prefix = f"{CASE_FILE}: "
     if not message.startswith(prefix):
         return message
