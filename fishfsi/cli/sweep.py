@@ -695,7 +695,8 @@ def _sweep(args: argparse.Namespace) -> int:
     if rank == 0:
         mpi = f", {size} MPI ranks" if size > 1 else ""
         resumed = f", {len(done)} done before (--resume)" if args.resume else ""
-        say(f"sweep: {len(points)} points ({args.method}{mpi}) into {output}{resumed}")
+        plural = "s" if len(points) != 1 else ""
+        say(f"sweep: {len(points)} point{plural} ({args.method}{mpi}) into {output}{resumed}")
 
     def on_row(name: str, row: dict, wall_s: float) -> None:
         finished = len(set(table.put(name, row)) & set(points))
@@ -716,7 +717,16 @@ def _sweep(args: argparse.Namespace) -> int:
             return EXIT_OK
         case = without_cfd(case)
         undamped = case.fluid.damping_ratio == 0 and not case.fluid.edge_drag
-        if case.fluid.model is not FluidModel.NONE and undamped:
+        a = case.analysis
+        if (case.fluid.model is FluidModel.NONE or undamped) and (
+            case.material.loss_factor == 0 and a.rayleigh_alpha_per_s == a.rayleigh_beta_s == 0
+        ):
+            print(
+                "note: no damping at all (material.loss_factor = 0, no fluid damping): at a "
+                "resonance the linear amplitude is bounded only by the frequency step",
+                file=sys.stderr,
+            )
+        elif case.fluid.model is not FluidModel.NONE and undamped:
             print(
                 "note: no fluid damping: the linear sweep's amplitudes grow without bound near "
                 "the wet resonances; --set fluid.edge_drag=true adds the separated-flow drag "
