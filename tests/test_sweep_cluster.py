@@ -842,7 +842,7 @@ def test_slurm_array_script_runs_one_point_per_task_into_one_table(slurm, tmp_pa
     assert job.returncode != 0  # the job array's state: one task failed
     assert points(table(out)) == [("sine", 2.0), ("sine", 8.0)], logs
     assert all(r["status"] == "ok" for r in table(out))
-    assert "sweep: 1 points (transient)" in logs[0] and "sweep: 1 points (transient)" in logs[1]
+    assert "sweep: 1 point (transient)" in logs[0] and "sweep: 1 point (transient)" in logs[1]
     assert (
         logs[2].strip().splitlines()[-1].startswith("error: --point 2: this sweep has points 0..1")
     )
