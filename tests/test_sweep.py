@@ -256,6 +256,20 @@ def test_a_sweep_of_nothing_new_is_refused_in_one_line(tmp_path, capsys, case, a
     assert not (tmp_path / "s" / "sweep.csv").exists()
 
 
+@pytest.mark.parametrize("flag", [[], ["--overwrite"], ["--resume"]])
+def test_a_sweep_into_a_runs_folder_is_refused(tmp_path, capsys, flag):
+    """sweep.csv beside a run's results.h5 hid the run from fsi-post."""
+    (tmp_path / "results.h5").write_text("a run")
+    args = [str(ROOT / "cases/seed/beam_sweep"), "--frequencies", "3", "--waveforms", "sine"]
+    assert sweep_cli.main([*args, "--output", str(tmp_path), *flag]) == 2
+    err = capsys.readouterr().err.strip()
+    assert (
+        err == f"error: --output {tmp_path}: holds a run of fsi-run (results.h5); sweep into "
+        "another folder"
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.h5"]
+
+
 def test_the_linear_sweep_oscillates_about_the_mean_voltage_equilibrium(tmp_path):
     """The MFCs' mean voltage (500 V) expands the active area against the plate around it;
     that prestress changes the bending stiffness. The free original fish in potential flow at

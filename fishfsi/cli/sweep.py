@@ -461,6 +461,14 @@ class SweepTable:
         that point's own row or run is there. A ``resume`` into a folder whose tables have no
         ``sweep_case.json`` is refused: its rows cannot be told to be this case's. Each
         refusal comes before anything there is written."""
+        from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE
+
+        run = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (self.output / n).is_file()]
+        if run:  # fsi-post would draw the sweep and no longer find the run
+            raise CaseError(
+                f"--output {self.output}: holds a run of fsi-run ({', '.join(run)}); sweep "
+                "into another folder"
+            )
         case_file = self.output / SWEEP_CASE_FILE
         if resume and not case_file.is_file():
             tables = [n for n in ("sweep.csv", "sweep.json") if (self.output / n).is_file()]
