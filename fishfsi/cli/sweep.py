@@ -226,7 +226,9 @@ def transient_sweep(
                 print(
                     f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr
                 )
-        nan = float("nan")
+        # a failed run's figures are NaN (its status says why); a figure an ok run did not
+        # give (a fast fluid's per-period thrust, a beam's thrust) is left out, never NaN
+        nan = float("nan") if not summary else None
         row = {
             "waveform": waveform.value,
             "frequency_hz": float(f),
@@ -235,7 +237,7 @@ def transient_sweep(
             "thrust_source": summary.get("thrust_source", ""),
             "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
             "mean_fluid_solves_per_window": summary.get(
-                "mean_fluid_solves_per_window", 1.0 if summary else nan
+                "mean_fluid_solves_per_window", 1.0 if summary else float("nan")
             ),
             # a start-up not yet settled (fsi-run's note): the point's figures are
             # its last period's, not the periodic state's
@@ -248,6 +250,7 @@ def transient_sweep(
         for key in PERIODIC_KEYS:
             row[key] = summary.get(key, nan)
         row["periodic"] = bool(summary.get("periodic", False))
+        row = {k: v for k, v in row.items() if v is not None}
         # a figure the run gave as NaN fails the point (one it did not give stays NaN: a beam
         # has no thrust)
         row["status"] = not_finite_status(
@@ -606,12 +609,13 @@ class SweepTable:
 
 def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
     """One finished point, for logs: ``sweep: point 3/26 sine 5 Hz: ...``."""
-    thrust = row.get("mean_thrust_n", row.get("slender_body_mean_thrust_n", float("nan")))
+    thrust = row.get("mean_thrust_n", row.get("slender_body_mean_thrust_n"))
     status = row.get("status", "ok")
     tail = "" if status == "ok" else f"; {status}"
+    thrust_text = "" if thrust is None else f"thrust {1e3 * thrust:.3g} mN, "
     return (
         f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: tip "
-        f"amplitude {1e3 * row['tip_amplitude_m']:.3g} mm, thrust {1e3 * thrust:.3g} mN, "
+        f"amplitude {1e3 * row['tip_amplitude_m']:.3g} mm, {thrust_text}"
         f"{wall_s:.1f} s{tail}"
     )
 
@@ -619,10 +623,11 @@ def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
 def print_table(rows: list[dict]) -> None:
     print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {'thrust [mN]':>12}")
     for r in rows:
-        thrust = r.get("mean_thrust_n", r["slender_body_mean_thrust_n"])
+        thrust = r.get("mean_thrust_n", r.get("slender_body_mean_thrust_n"))
+        shown = f"{'-':>12}" if thrust is None else f"{1e3 * thrust:12.2f}"
         print(
             f"{r['waveform']:>8} {r['frequency_hz']:7.2f} {1e3 * r['tip_amplitude_m']:19.2f} "
-            f"{1e3 * thrust:12.2f}  {r.get('status', '')}"
+            f"{shown}  {r.get('status', '')}"
         )
 
 
