@@ -92,3 +92,26 @@ def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
     assert summary["tip_amplitude_periodic_uncertainty_m"] == found.uncertainty
     assert summary["periodic"] == found.is_periodic(0.01)
     assert "mean_thrust_periodic_n" not in summary  # in vacuum: no thrust per period
+
+
+def test_a_fast_fluid_runs_thrust_has_its_per_period_figures_and_estimate(tmp_path):
+    """The slender-body thrust over each complete period (the last is the run's thrust) and
+    its periodic estimate, as OpenFOAM's thrust has: a sweep row then holds no NaN for it."""
+    case = Path(__file__).resolve().parents[1] / "cases/fish_vacuum_3Hz"
+    done = subprocess.run(
+        [sys.executable, "-m", "fishfsi.cli.run", str(case), "--json", "--quiet"]
+        + ["--set", "mesh.level=coarse", "--set", "time.periods=3", "--set", "output.vtk=false"]
+        + ["--set", "time.steps_per_period=20", "--set", "fluid.model=slender_body"]
+        + ["--output", str(tmp_path / "run")],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    thrust = summary["mean_thrust_per_period_n"]
+    assert len(thrust) == 3 and summary["thrust_source"] == "slender_body"
+    assert thrust[-1] == summary["mean_thrust_n"] == summary["slender_body_mean_thrust_n"]
+    found = estimate(thrust)
+    assert summary["mean_thrust_periodic_n"] == found.value
+    assert summary["mean_thrust_periodic_uncertainty_n"] == found.uncertainty

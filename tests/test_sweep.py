@@ -107,8 +107,8 @@ def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, mo
     ]
     assert np.isnan(rows[1]["tip_amplitude_m"])
     assert rows[0]["tip_amplitude_m"] > 0 and rows[2]["tip_amplitude_m"] > 0
-    # an ok row holds no NaN: a figure the run did not give (a fast fluid's periodic thrust)
-    # is left out, an empty cell in sweep.csv
+    # an ok row holds no NaN: a figure the run did not give (half a period: no per-period
+    # thrust, so no periodic thrust) is left out, an empty cell in sweep.csv
     for row in (rows[0], rows[2]):
         assert not [k for k, v in row.items() if isinstance(v, float) and np.isnan(v)]
         assert "mean_thrust_periodic_n" not in row
