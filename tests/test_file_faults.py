@@ -363,6 +363,54 @@ def test_a_case_that_a_sweep_made_with_numpy_numbers_is_written_as_toml_that_loa
     assert case_dict(load_case(tmp_path)) == case_dict(swept)
 
 
+def test_a_runs_summary_is_kept_beside_its_results_and_in_an_asked_output(tmp_path, capsys):
+    """fsi-run --output on a modal case wrote nothing there; a dynamic run's summary (what
+    --json prints) was only on stdout. Both are kept as summary.json now."""
+    code = run_cli.main(
+        [
+            str(ROOT / "cases" / "beam_in_liquid"),
+            "--json",
+            "--quiet",
+            "--set",
+            "time.periods=0.1",
+            "--set",
+            "output.vtk=false",
+            "--output",
+            str(tmp_path / "dyn"),
+        ]
+    )
+    printed = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert json.loads((tmp_path / "dyn" / "summary.json").read_text()) == printed
+    code = run_cli.main(
+        [
+            str(ROOT / "cases" / "beam_in_liquid"),
+            "--json",
+            "--quiet",
+            "--set",
+            "analysis.kind=modal",
+            "--output",
+            str(tmp_path / "modal"),
+        ]
+    )
+    printed = json.loads(capsys.readouterr().out)
+    assert code == 0 and printed["dry_hz"]
+    assert json.loads((tmp_path / "modal" / "summary.json").read_text()) == printed
+    (tmp_path / "afile").write_text("")
+    code = run_cli.main(
+        [
+            str(ROOT / "cases" / "beam_in_liquid"),
+            "--quiet",
+            "--set",
+            "analysis.kind=modal",
+            "--output",
+            str(tmp_path / "afile"),
+        ]
+    )
+    assert code == 2
+    assert capsys.readouterr().err.strip().startswith(f"error: --output {tmp_path / 'afile'}: ")
+
+
 def test_results_can_be_read_by_another_process_while_the_run_writes(tmp_path):
     """The writer takes no HDF5 file lock and flushes every window: a reader in another
     process (default h5py settings) sees the rows written so far."""

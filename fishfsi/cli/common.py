@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -164,3 +166,14 @@ def run_main(
 ) -> int:
     args = parser.parse_args(argv)
     return guarded(lambda: body(args))
+
+
+def atomic_write(path: Path, text: str) -> None:
+    """``text`` into ``path`` through a renamed temporary file: a reader, or a kill, never
+    meets half a file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", newline="") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)

@@ -4,6 +4,7 @@ summary (``--json`` for machines)."""
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from collections.abc import Sequence
@@ -13,7 +14,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from fsi_orchestrator.case import Case
+from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel
 from fsi_orchestrator.case.timing import case_schedule, windows_per_period
 from fsi_orchestrator.loop import OutputSettings, Schedule, StopRule, WindowLoop
@@ -21,7 +22,7 @@ from fsi_orchestrator.periodic import summary_fields as periodic_fields
 from fsi_orchestrator.provenance import case_identity, run_attributes
 from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
 
-from .common import EXIT_OK, base_parser, emit, load, run_main
+from .common import EXIT_OK, atomic_write, base_parser, emit, load, run_main, to_jsonable
 from .compose import (
     build_coupled_run,
     is_coupled,
@@ -522,11 +523,24 @@ def execute(
     return summary
 
 
+RUN_SUMMARY_FILE = "summary.json"
+
+
 def _body(args: argparse.Namespace) -> int:
     case = load(args)
     output = Path(args.output) if args.output else case.directory / "output"
+    # a dynamic run keeps its summary beside results.h5; another kind only where --output
+    # asks for a folder (a modal or static case's answer is the summary alone)
+    keep = args.output is not None or case.analysis.kind is AnalysisKind.DYNAMIC
+    if keep and case.analysis.kind is not AnalysisKind.DYNAMIC:
+        try:  # refused before the work, as a dynamic run's folder is
+            output.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
+    if keep:
+        atomic_write(output / RUN_SUMMARY_FILE, json.dumps(to_jsonable(summary), indent=1))
     return EXIT_OK
 
 

@@ -49,6 +49,7 @@ from .common import (
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_OK,
+    atomic_write,
     base_parser,
     emit,
     load,
@@ -369,15 +370,6 @@ def write_tables(rows: list[dict], output: Path) -> None:
     writer.writerows(rows)
     atomic_write(output / "sweep.csv", text.getvalue())
     atomic_write(output / "sweep.json", json.dumps(to_jsonable(rows), indent=1))
-
-
-def atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", newline="") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
 
 
 @contextlib.contextmanager

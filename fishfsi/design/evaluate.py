@@ -33,7 +33,7 @@ from fsi_orchestrator.case.loader import CASE_FILE, case_from_dict, merge_overri
 from fsi_orchestrator.case.planform import resolve_fish
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, GeometryKind
 
-from ..cli.sweep import atomic_write  # one atomic writer for every table and record
+from ..cli.common import atomic_write  # one atomic writer for every table and record
 from .study import (
     _INDEXED,
     LINEAR_QUANTITIES,
