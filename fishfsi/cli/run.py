@@ -540,7 +540,14 @@ def _body(args: argparse.Namespace) -> int:
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
     if keep:
-        atomic_write(output / RUN_SUMMARY_FILE, json.dumps(to_jsonable(summary), indent=1))
+        path = output / RUN_SUMMARY_FILE
+        try:
+            atomic_write(path, json.dumps(to_jsonable(summary), indent=1))
+        except OSError as err:  # the summary is printed; the results are on disk
+            raise RuntimeError(
+                f"{path}: cannot write the summary ({err.strerror or err}); it is printed "
+                "above and a dynamic run's results are in results.h5"
+            ) from None
     return EXIT_OK
 
 
