@@ -84,8 +84,8 @@ def _show(value: Any) -> str:
     """A value for a one-line message: never long, never raising (huge ints, deep nesting)."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**16:
         return f"an integer of about {value.bit_length() * math.log10(2):.0f} digits"
-    if isinstance(value, float):
-        return f"{value:g}"
+    if isinstance(value, float):  # as typed: 1e3 is 1000.0, not the integer 1000
+        return repr(value)
     try:
         text = repr(value)
     except (RecursionError, ValueError):
