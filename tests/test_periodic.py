@@ -72,19 +72,25 @@ def test_the_summary_says_periodic_once_every_figure_is_known_to_the_tolerance()
     }
 
 
-def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
+def vacuum_fish_summary(output: Path, periods: int, *overrides: str) -> dict:
+    """fsi-run --json of the coarse fish_vacuum_3Hz case, 20 windows per period."""
     case = Path(__file__).resolve().parents[1] / "cases/fish_vacuum_3Hz"
+    sets = ["mesh.level=coarse", f"time.periods={periods}", "output.vtk=false"]
+    sets += ["time.steps_per_period=20", *overrides]
     done = subprocess.run(
         [sys.executable, "-m", "fishfsi.cli.run", str(case), "--json", "--quiet"]
-        + ["--set", "mesh.level=coarse", "--set", "time.periods=2", "--set", "output.vtk=false"]
-        + ["--set", "time.steps_per_period=20"]
-        + ["--output", str(tmp_path / "run")],
+        + [x for s in sets for x in ("--set", s)]
+        + ["--output", str(output)],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
-    summary = json.loads(done.stdout)
+    return json.loads(done.stdout)
+
+
+def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
+    summary = vacuum_fish_summary(tmp_path / "run", 2)
     assert summary["windows_per_period"] == 20 and summary["periodic_tolerance"] == 0.01
     assert len(summary["tip_amplitude_per_period_m"]) == 2
     found = estimate(summary["tip_amplitude_per_period_m"])
@@ -97,18 +103,7 @@ def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
 def test_a_fast_fluid_runs_thrust_has_its_per_period_figures_and_estimate(tmp_path):
     """The slender-body thrust over each complete period (the last is the run's thrust) and
     its periodic estimate, as OpenFOAM's thrust has: a sweep row then holds no NaN for it."""
-    case = Path(__file__).resolve().parents[1] / "cases/fish_vacuum_3Hz"
-    done = subprocess.run(
-        [sys.executable, "-m", "fishfsi.cli.run", str(case), "--json", "--quiet"]
-        + ["--set", "mesh.level=coarse", "--set", "time.periods=3", "--set", "output.vtk=false"]
-        + ["--set", "time.steps_per_period=20", "--set", "fluid.model=slender_body"]
-        + ["--output", str(tmp_path / "run")],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert done.returncode == 0, done.stderr
-    summary = json.loads(done.stdout)
+    summary = vacuum_fish_summary(tmp_path / "run", 3, "fluid.model=slender_body")
     thrust = summary["mean_thrust_per_period_n"]
     assert len(thrust) == 3 and summary["thrust_source"] == "slender_body"
     assert thrust[-1] == summary["mean_thrust_n"] == summary["slender_body_mean_thrust_n"]

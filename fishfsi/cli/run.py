@@ -286,15 +286,14 @@ def run_dynamic(
         summary.update(coupling_summary(case, path, coupling))
         summary.update(fluid_force_summary(case, path))
     if added is not None or coupling is not None:
-        summary.update(thrust_estimate(case, solid, path))
-    slender_per_period = summary.pop(SLENDER_PER_PERIOD, None)
+        # per period only where it is the run's thrust (OpenFOAM has its own per period)
+        own = "mean_thrust_n" not in summary
+        summary.update(thrust_estimate(case, solid, path, per_period=own))
     if "mean_thrust_n" in summary:
         summary["thrust_source"] = "openfoam"
     elif "slender_body_mean_thrust_n" in summary:
         summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
         summary["thrust_source"] = "slender_body"
-        if slender_per_period is not None:  # the fast fluid's thrust has its periodic estimate
-            summary["mean_thrust_per_period_n"] = slender_per_period
     label_results(path, {"thrust_source": summary.get("thrust_source", "none")})
     summary["wall_s"] = time.perf_counter() - start
     summary["setup_s"] = start - set_up
@@ -438,12 +437,10 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
     }
 
 
-SLENDER_PER_PERIOD = "slender_body_thrust_per_period_n"
-
-
-def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
-    """Slender-body (Lighthill, eq. 5-12, fixed head) mean thrust over the last period, and over
-    each complete period (aligned with the tail amplitude's per-period figures)."""
+def thrust_estimate(case: Case, solid, results_path: Path, per_period: bool = False) -> dict:
+    """Slender-body (Lighthill, eq. 5-12, fixed head) mean thrust over the last period; with
+    ``per_period`` also over each complete period (``mean_thrust_per_period_n``, aligned with
+    the tail amplitude's per-period figures)."""
     from fluid_adapter.slender_body import mean_thrust_from_shell
 
     if case.time.step_s is not None:
@@ -475,10 +472,12 @@ def thrust_estimate(case: Case, solid, results_path: Path) -> dict:
             "slender_body_mean_thrust_n": thrust_until(len(t)),
             "thrust_averaged_over_s": period,
         }
+    if not per_period:
+        return {"slender_body_mean_thrust_n": thrust_until(len(t))}
     n = windows_per_period(case)
     ends = range(len(t) - (len(t) // n - 1) * n, len(t) + 1, n)  # complete periods, as the tail's
-    per_period = [thrust_until(end) for end in ends]
-    return {"slender_body_mean_thrust_n": per_period[-1], SLENDER_PER_PERIOD: per_period}
+    thrusts = [thrust_until(end) for end in ends]
+    return {"slender_body_mean_thrust_n": thrusts[-1], "mean_thrust_per_period_n": thrusts}
 
 
 def static_summary(case: Case) -> dict:
