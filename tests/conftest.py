@@ -2,13 +2,24 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from fsi_orchestrator.case.loader import case_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def _refuse(constant: str) -> Any:
+    raise ValueError(f"not strict JSON: {constant}")
+
+
+def strict_json(text: str) -> Any:
+    """JSON as jq reads it: NaN and Infinity refused."""
+    return json.loads(text, parse_constant=_refuse)
 
 
 @pytest.fixture

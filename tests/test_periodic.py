@@ -3,7 +3,6 @@ exact on a geometric sequence, and bracketing a measured start-up's limit."""
 
 from __future__ import annotations
 
-import json
 import math
 import subprocess
 import sys
@@ -12,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from fsi_orchestrator.periodic import estimate, summary_fields
+from tests.conftest import strict_json
 
 # The main job's scene (default level, iqn-ils-am) continued to 10 periods, docs/coupling.md
 # "The main job run on to its periodic state": tail amplitude (mm) and mean thrust (N) per
@@ -86,7 +86,17 @@ def vacuum_fish_summary(output: Path, periods: int, *overrides: str) -> dict:
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout)
+    return strict_json(done.stdout)
+
+
+def test_an_uncertainty_not_known_yet_is_null_in_strict_json(tmp_path):
+    """One period bounds nothing: the estimate's uncertainty is infinite in Python and null in
+    --json and summary.json, which jq reads (it refuses Infinity)."""
+    summary = vacuum_fish_summary(tmp_path / "run", 1)
+    assert summary["tip_amplitude_periodic_m"] > 0
+    assert summary["tip_amplitude_periodic_uncertainty_m"] is None
+    assert summary["periodic"] is False
+    assert strict_json((tmp_path / "run" / "summary.json").read_text()) == summary
 
 
 def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):

@@ -28,6 +28,7 @@ from solid_adapter.harmonic import (
     periodic_response,
 )
 from solid_adapter.piezo import DriveSignal
+from tests.conftest import strict_json
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases/beam_in_liquid"
@@ -82,8 +83,9 @@ def test_fsi_sweep_writes_the_table_and_fsi_post_draws_it(tmp_path, capsys):
 
 
 def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, monkeypatch):
-    """A run that fails (here: the 2nd of three) becomes a row with NaN and its error; the
-    other runs' rows are written and the sweep exits with EXIT_FAILED."""
+    """A run that fails (here: the 2nd of three) becomes a row with its error and no figures
+    (null in strict JSON, an empty cell); the other runs' rows are written and the sweep exits
+    with EXIT_FAILED."""
     from fishfsi.cli import run as run_cli
     from fishfsi.cli.common import EXIT_FAILED
 
@@ -99,18 +101,21 @@ def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, mo
     args = [str(CASE), "--frequencies", "2,8,20", "--waveforms", "sine", "--method", "transient"]
     args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
     assert sweep_cli.main([*args, "--json", "--output", str(out)]) == EXIT_FAILED
-    rows = json.loads(capsys.readouterr().out)["rows"]
+    rows = strict_json(capsys.readouterr().out)["rows"]
     assert [r["status"] for r in rows] == [
         "ok",
         "failed: pimpleFoam diverged in somewhere/openfoam",
         "ok",
     ]
-    assert np.isnan(rows[1]["tip_amplitude_m"])
+    assert rows[1]["tip_amplitude_m"] is None
+    assert strict_json((out / "sweep.json").read_text())[1]["tip_amplitude_m"] is None
+    with open(out / "sweep.csv", newline="") as table:
+        assert list(csv.DictReader(table))[1]["tip_amplitude_m"] == ""
     assert rows[0]["tip_amplitude_m"] > 0 and rows[2]["tip_amplitude_m"] > 0
     # an ok row holds no NaN: a figure the run did not give (half a period: no per-period
     # thrust, so no periodic thrust) is left out, an empty cell in sweep.csv
     for row in (rows[0], rows[2]):
-        assert not [k for k, v in row.items() if isinstance(v, float) and np.isnan(v)]
+        assert not [k for k, v in row.items() if v is None]
         assert "mean_thrust_periodic_n" not in row
     assert len(list(csv.DictReader(open(out / "sweep.csv")))) == 3
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from collections.abc import Callable, Sequence
@@ -115,11 +116,12 @@ def check_plausible(case: Case) -> None:
             )
 
 
-def to_jsonable(value: Any) -> Any:
+def plain(value: Any) -> Any:
+    """numpy scalars and arrays as Python floats and lists."""
     if isinstance(value, dict):
-        return {k: to_jsonable(v) for k, v in value.items()}
+        return {k: plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [to_jsonable(v) for v in value]
+        return [plain(v) for v in value]
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, np.generic):
@@ -127,11 +129,30 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+def to_jsonable(value: Any) -> Any:
+    """Plain JSON values; a figure that is not finite (an uncertainty from one period, a failed
+    point's amplitude) becomes null, since strict readers (jq, JavaScript) refuse NaN and
+    Infinity."""
+    value = plain(value)
+    if isinstance(value, dict):
+        return {k: to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def json_text(value: Any, indent: int | None = None) -> str:
+    """Strict JSON of ``value`` (see ``to_jsonable``)."""
+    return json.dumps(to_jsonable(value), indent=indent, allow_nan=False)
+
+
 def emit(summary: dict[str, Any], as_json: bool) -> None:
-    summary = to_jsonable(summary)
     if as_json:
-        print(json.dumps(summary))
+        print(json_text(summary))
         return
+    summary = plain(summary)
     for key, value in summary.items():
         if isinstance(value, list) and value and isinstance(value[0], float):
             value = "[" + ", ".join(f"{v:.6g}" for v in value) + "]"

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 import time
@@ -31,13 +30,12 @@ from ..design.evaluate import (
     evaluate,
     finite,
     is_ok,
-    jsonable,
 )
 from ..design.methods import best_of, pareto_front, run_method
 from ..design.outputs import plot_all, write_best_case, write_pareto, write_tables
 from ..design.runner import Evaluator, prepare_output, serve, study_identity
 from ..design.study import Evaluation, Study, load_study
-from .common import EXIT_OK, emit, guarded
+from .common import EXIT_OK, emit, guarded, json_text
 from .sweep import mpi_world, sigterm_as_interrupt
 
 
@@ -140,7 +138,7 @@ def confirm(study: Study, records: list[dict], k: int, output: Path, say) -> dic
         a >= b for a, b in zip(scores, scores[1:], strict=False)
     )
     result = {"designs": rows, "ranking_holds": holds}
-    atomic_write(output / "confirm.json", json.dumps(jsonable(result), indent=1))
+    atomic_write(output / "confirm.json", json_text(result, indent=1))
     return result
 
 
@@ -200,12 +198,12 @@ def _design(args: argparse.Namespace) -> int:
     if args.confirm:
         summary["confirm"] = confirm(study, records, args.confirm, output, say)
     if args.json:
-        print(json.dumps(jsonable(summary)))
+        print(json_text(summary))
     else:
         emit({k: v for k, v in summary.items() if k not in ("best", "pareto")}, False)
         b = summary["best"]
-        print(f"best (evaluation {b['evaluation']}): {json.dumps(jsonable(b['parameters']))}")
-        print(f"  {json.dumps(jsonable(b['objectives']))} -> {b['case']}")
+        print(f"best (evaluation {b['evaluation']}): {json_text(b['parameters'])}")
+        print(f"  {json_text(b['objectives'])} -> {b['case']}")
     return EXIT_OK
 
 

@@ -13,7 +13,6 @@ the same motion stand beside it.
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from pathlib import Path
 
@@ -22,6 +21,7 @@ from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case, CaseError
 
+from .common import atomic_write, json_text
 from .compose import without_cfd
 from .linear import linear_model, swimming_summary
 
@@ -126,5 +126,5 @@ def flume_summary(case: Case, output: Path, say=print) -> dict:
     }
     history = np.column_stack([result.times_s, result.force_n])
     np.savetxt(output / FORCES_FILE, history, delimiter=",", header="t_s,Fx_n,Fy_n,Fz_n")
-    (output / FLUME_FILE).write_text(json.dumps(summary, indent=1))
+    atomic_write(output / FLUME_FILE, json_text(summary, indent=1))
     return summary

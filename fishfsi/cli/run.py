@@ -4,7 +4,6 @@ summary (``--json`` for machines)."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from collections.abc import Sequence
@@ -22,7 +21,7 @@ from fsi_orchestrator.periodic import summary_fields as periodic_fields
 from fsi_orchestrator.provenance import case_identity, run_attributes
 from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
 
-from .common import EXIT_OK, atomic_write, base_parser, emit, load, run_main, to_jsonable
+from .common import EXIT_OK, atomic_write, base_parser, emit, json_text, load, run_main
 from .compose import (
     build_coupled_run,
     is_coupled,
@@ -541,7 +540,7 @@ def _body(args: argparse.Namespace) -> int:
     if keep:
         path = output / RUN_SUMMARY_FILE
         try:
-            atomic_write(path, json.dumps(to_jsonable(summary), indent=1))
+            atomic_write(path, json_text(summary, indent=1))
         except OSError as err:  # the summary is printed; the results are on disk
             raise RuntimeError(
                 f"{path}: cannot write the summary ({err.strerror or err}); it is printed "

@@ -52,9 +52,10 @@ from .common import (
     atomic_write,
     base_parser,
     emit,
+    json_text,
     load,
+    plain,
     run_main,
-    to_jsonable,
 )
 from .compose import without_cfd
 from .linear import (
@@ -369,7 +370,7 @@ def write_tables(rows: list[dict], output: Path) -> None:
     writer.writeheader()
     writer.writerows(rows)
     atomic_write(output / "sweep.csv", text.getvalue())
-    atomic_write(output / "sweep.json", json.dumps(to_jsonable(rows), indent=1))
+    atomic_write(output / "sweep.json", json_text(rows, indent=1))
 
 
 @contextlib.contextmanager
@@ -397,7 +398,7 @@ def sweep_identity(case: Case, method: str) -> dict:
     frequency and waveform, nor its folder), the method and this version."""
     from fsi_orchestrator import __version__
 
-    fields = to_jsonable(dataclasses.asdict(case))
+    fields = plain(dataclasses.asdict(case))  # NaN and inf kept: the key of older sweeps
     fields.pop("directory", None)
     for key in ("frequency_hz", "waveform"):
         fields["actuation"].pop(key, None)
@@ -587,8 +588,8 @@ class SweepTable:
 
     def put(self, name: str, row: dict) -> dict[str, dict]:
         """Record a finished point and merge the tables; every finished row, by name."""
-        record = {"sweep": self.key, "row": to_jsonable(row)}
-        atomic_write(self.rows_dir / f"{name}.json", json.dumps(record))
+        record = {"sweep": self.key, "row": row}
+        atomic_write(self.rows_dir / f"{name}.json", json_text(record))
         return self.merge()
 
     def merge(self) -> dict[str, dict]:
@@ -599,15 +600,25 @@ class SweepTable:
         return found
 
 
+def _milli(value: float | None, spec: str) -> str:
+    """A figure in milli-units; a failed point's (null in the tables) as '-'."""
+    return "-" if value is None or not np.isfinite(value) else format(1e3 * value, spec)
+
+
+def _thrust(row: dict) -> float | None:
+    thrust = row.get("mean_thrust_n")
+    return row.get("slender_body_mean_thrust_n") if thrust is None else thrust
+
+
 def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
     """One finished point, for logs: ``sweep: point 3/26 sine 5 Hz: ...``."""
-    thrust = row.get("mean_thrust_n", row.get("slender_body_mean_thrust_n"))
+    thrust = _thrust(row)
     status = row.get("status", "ok")
     tail = "" if status == "ok" else f"; {status}"
-    thrust_text = "" if thrust is None else f"thrust {1e3 * thrust:.3g} mN, "
+    thrust_text = "" if thrust is None else f"thrust {_milli(thrust, '.3g')} mN, "
     return (
         f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: tip "
-        f"amplitude {1e3 * row['tip_amplitude_m']:.3g} mm, {thrust_text}"
+        f"amplitude {_milli(row.get('tip_amplitude_m'), '.3g')} mm, {thrust_text}"
         f"{wall_s:.1f} s{tail}"
     )
 
@@ -615,11 +626,10 @@ def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
 def print_table(rows: list[dict]) -> None:
     print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {'thrust [mN]':>12}")
     for r in rows:
-        thrust = r.get("mean_thrust_n", r.get("slender_body_mean_thrust_n"))
-        shown = f"{'-':>12}" if thrust is None else f"{1e3 * thrust:12.2f}"
         print(
-            f"{r['waveform']:>8} {r['frequency_hz']:7.2f} {1e3 * r['tip_amplitude_m']:19.2f} "
-            f"{shown}  {r.get('status', '')}"
+            f"{r['waveform']:>8} {r['frequency_hz']:7.2f} "
+            f"{_milli(r.get('tip_amplitude_m'), '.2f'):>19} {_milli(_thrust(r), '.2f'):>12}  "
+            f"{r.get('status', '')}"
         )
 
 

@@ -33,7 +33,7 @@ from fsi_orchestrator.case.loader import CASE_FILE, case_from_dict, merge_overri
 from fsi_orchestrator.case.planform import resolve_fish
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, GeometryKind
 
-from ..cli.common import atomic_write  # one atomic writer for every table and record
+from ..cli.common import atomic_write, json_text  # one writer for every table and record
 from .study import (
     _INDEXED,
     LINEAR_QUANTITIES,
@@ -141,7 +141,7 @@ def evaluate(spec: EvaluationSpec, design: Design) -> dict:
             first = str(err).splitlines()[0] if str(err) else type(err).__name__
             record.update(status=FAILED, reason=first)
     record["wall_s"] = time.perf_counter() - start
-    atomic_write(folder / SUMMARY_FILE, json.dumps(jsonable(record), indent=1))
+    atomic_write(folder / SUMMARY_FILE, json_text(record, indent=1))
     return record
 
 
@@ -292,19 +292,6 @@ def transient_figures(case: Case, folder: Path) -> dict:
 
 
 # --------------------------------------------------------------------------- files
-
-
-def jsonable(value: Any) -> Any:
-    from ..cli.common import to_jsonable
-
-    value = to_jsonable(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: jsonable(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [jsonable(v) for v in value]
-    return value
 
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
 import shutil
@@ -16,7 +15,8 @@ import numpy as np
 
 from fsi_orchestrator.case.loader import CASE_FILE
 
-from .evaluate import SUMMARY_FILE, atomic_write, finite, is_ok, jsonable
+from ..cli.common import json_text
+from .evaluate import SUMMARY_FILE, atomic_write, finite, is_ok
 from .study import Study
 
 FIDELITY_COLUMNS = ("method", "shell_mesh", "fluid", "fluid_mesh", "steps_per_period", "modes")
@@ -88,7 +88,7 @@ def write_best_case(best: dict, output: Path) -> Path:
 
 
 def write_pareto(front: list[dict], study: Study, output: Path) -> None:
-    atomic_write(output / "pareto.json", json.dumps(jsonable(front), indent=1))
+    atomic_write(output / "pareto.json", json_text(front, indent=1))
 
 
 def plot_all(records: list[dict], study: Study, output: Path, front: list[dict]) -> list[Path]:
