@@ -32,7 +32,8 @@ def run_study(name: str, output: Path, workers: int) -> tuple[dict, float]:
     start = time.perf_counter()
     done = subprocess.run(
         [sys.executable, "-m", "fishfsi.cli.design", str(ROOT / "studies" / name)]
-        + ["--output", str(output / name), "--workers", str(workers), "--json", "--quiet"],
+        + ["--output", str(output / name), "--overwrite", "--workers", str(workers)]
+        + ["--json", "--quiet"],
         capture_output=True,
         text=True,
         check=False,

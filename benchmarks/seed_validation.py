@@ -94,7 +94,10 @@ class FastModel:
         model.set_added_mass(self.cache[key].matrix)
         if case.fluid.edge_drag:
             model.fluid_damping = edge_drag(
-                model, case.fluid.density_kg_m3, case.actuation.frequency_hz
+                model,
+                case.fluid.density_kg_m3,
+                case.actuation.frequency_hz,
+                frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
         return model
 

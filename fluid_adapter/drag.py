@@ -17,6 +17,11 @@ C0 and q are fitted to OpenFOAM (benchmarks/fast_fluid_damping.py). The data are
 force on the clamped original fish moving in its first mode at 3 Hz, k-omega SST, coarse level.
 They come from benchmarks/openfoam_added_mass.py, with the damping per tail velocity at tail
 amplitudes of 1, 7.8 and 17.8 mm.
+
+One frequency cannot tell how the coefficient changes with it at a fixed KC. On the coupled
+curves of the same scene (1-25 Hz) the 3 Hz law damps the held fish's second mode away, where
+OpenFOAM keeps its resonance: ``frequency_exponent`` r scales C0 by (f / 3 Hz)^-r
+(``fluid.edge_drag_frequency_exponent``; benchmarks/fast_fluid_accuracy.py).
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from scipy.special import gamma
 # benchmarks/fast_fluid_damping.py fits these to the OpenFOAM measurements (docs/validation.md)
 DRAG_C0 = 9.82
 DRAG_Q = 0.224
+DRAG_FIT_HZ = 3.0  # the drive frequency of the fitted motion
 NDOF = 5  # the shell's DOFs per node (u_x, u_y, u_z, theta_1, theta_2)
 # below this normal speed the power law is smoothed (0.02 % of the force at 0.05 m/s)
 SMOOTH_SPEED_M_S = 1e-3
@@ -91,11 +97,14 @@ def edge_drag(
     c0: float = DRAG_C0,
     q: float = DRAG_Q,
     all_harmonics: bool = True,
+    frequency_exponent: float = 0.0,
 ) -> EdgeDrag:
-    """The drag law on a shell model's nodes (lumped nodal areas, local plate height)."""
+    """The drag law on a shell model's nodes (lumped nodal areas, local plate height), its
+    coefficient scaled by (f / DRAG_FIT_HZ)^-frequency_exponent away from the fit's 3 Hz."""
     omega = 2 * np.pi * frequency_hz
     area = np.asarray(model.area_matrix.sum(axis=1)).ravel()
     height = model.layout.height(model.mesh.nodes[:, 0])
+    c0 = c0 * (frequency_hz / DRAG_FIT_HZ) ** -frequency_exponent
     kappa = 0.5 * density_kg_m3 * c0 * (omega * height / (2 * np.pi)) ** q
     return EdgeDrag(
         coefficients=kappa * area, exponent=1.0 - q, omega=omega, all_harmonics=all_harmonics

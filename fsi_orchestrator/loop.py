@@ -244,8 +244,9 @@ def load_checkpoint(
         ) from None
     changed = "run without --resume, or resume with the settings it was written with"
     stored = attrs.get(IDENTITY_ATTR)
-    if identity is not None and stored is not None and stored != identity:
-        keys = ", ".join(identity_changes(stored, identity))
+    changes = identity_changes(stored, identity) if identity and stored else []
+    if changes:
+        keys = ", ".join(changes)
         raise ResumeError(
             f"{path}: belongs to another case ({keys} changed since it was written); {changed}"
         )

@@ -104,19 +104,23 @@ def case_toml(case: Case) -> str:
 
 
 def case_identity(case: Case) -> str:
-    """The sections a checkpoint belongs to, as JSON text."""
+    """The sections a checkpoint belongs to, and the fluid model (a run resumed under
+    another one would mix two fluids' windows under one label), as JSON text."""
     raw = case_dict(case)
-    return json.dumps({s: raw[s] for s in IDENTITY_SECTIONS}, sort_keys=True)
+    identity = {s: raw[s] for s in IDENTITY_SECTIONS}
+    identity["fluid"] = {"model": raw["fluid"]["model"]}
+    return json.dumps(identity, sort_keys=True)
 
 
 def identity_changes(stored: str, current: str, limit: int = 3) -> list[str]:
-    """``section.key`` of the first few keys that differ between two identities."""
+    """``section.key`` of the first few keys that differ between two identities, over the
+    sections the stored one holds (older checkpoints hold no fluid model)."""
     a, b = json.loads(stored), json.loads(current)
     keys = sorted(
         f"{s}.{k}"
-        for s in set(a) | set(b)
-        for k in set(a.get(s, {})) | set(b.get(s, {}))
-        if a.get(s, {}).get(k) != b.get(s, {}).get(k)
+        for s in set(a)
+        for k in set(a[s]) | set(b.get(s, {}))
+        if a[s].get(k) != b.get(s, {}).get(k)
     )
     return keys[:limit]
 

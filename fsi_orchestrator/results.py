@@ -142,6 +142,8 @@ def check_writable(
             os.close(os.open(path, os.O_WRONLY | os.O_APPEND))
     except OSError as err:
         where = Path(err.filename) if err.filename else directory
+        if where.name.startswith(".write-probe-"):  # the folder refused a new file
+            where = where.parent
         raise write_failure(where, err, "nothing was run", then="run again") from None
     if shutil.disk_usage(directory).free < MIN_FREE_BYTES:
         full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))

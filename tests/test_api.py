@@ -40,6 +40,7 @@ def test_the_api_runs_a_case_as_fsi_run_does(tmp_path):
     assert results.summary["tip_amplitude_m"] == pytest.approx(np.ptp(tip[:, 2]) / 2)
     assert results.thrust_n is None  # in vacuum the fluid reports no force
     assert "shell/tip_displacement_m" in results.names()
+    np.testing.assert_array_equal(results.series("shell/tip_displacement_m"), tip)
     assert json.loads(results.attributes["overrides"]) == SETTINGS
 
 

@@ -13,6 +13,7 @@ import pytest
 
 from fishfsi.cli import modal as modal_cli
 from fishfsi.cli import run as run_cli
+from fishfsi.cli import sweep as sweep_cli
 from fsi_orchestrator.case.params import spec_of
 from fsi_orchestrator.case.schema import SECTIONS
 
@@ -40,7 +41,9 @@ def console(command: str, case: Path, *args: str) -> subprocess.CompletedProcess
 def run(capsys, command: str, case: Path, *args: str) -> subprocess.CompletedProcess:
     """The command's main() in this process: what the console script runs, minus the start-up
     (an exception that escapes it fails the test as a traceback would)."""
-    main = {"fsi-run": run_cli.main, "fsi-modal": modal_cli.main}[command]
+    main = {"fsi-run": run_cli.main, "fsi-modal": modal_cli.main, "fsi-sweep": sweep_cli.main}[
+        command
+    ]
     capsys.readouterr()
     code = main([str(case), "--json", *args])
     out, err = capsys.readouterr()
@@ -150,6 +153,13 @@ def test_utf8_byte_order_mark_is_read(tmp_path):
 def test_bad_override_one_line(tmp_path, capsys, override, named):
     case = case_with(tmp_path, '[case]\ntitle = "t"\n')
     assert_one_line(run(capsys, "fsi-run", case, "--set", override), named)
+
+
+@pytest.mark.parametrize("command", ["fsi-run", "fsi-sweep"])
+def test_an_empty_output_is_refused_not_taken_for_the_default(tmp_path, capsys, command):
+    case = case_with(tmp_path, '[case]\ntitle = "t"\n')
+    assert_one_line(run(capsys, command, case, "--output", ""), "--output is empty")
+    assert not (Path(case) / "output").exists()
 
 
 def test_empty_case_with_an_override_is_a_case(tmp_path, capsys):

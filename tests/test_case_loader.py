@@ -41,6 +41,9 @@ def test_override_is_validated_like_the_file_and_named_as_the_set(tmp_path):
     # the file's own key is still the file's, whatever else --set gives
     msg = error_of(tmp_path, "[actuation]\nfrequency_hz = -3\n", ["fluid.model=potential"])
     assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
+    # a list's item is the --set's that gave the list
+    msg = error_of(tmp_path, "", ["actuation.left_volts=[nan, 1500]"])
+    assert msg.startswith("--set 'actuation.left_volts=[nan, 1500]': actuation.left_volts[0]")
 
 
 @pytest.mark.parametrize(

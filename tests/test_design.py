@@ -260,3 +260,20 @@ def test_confirm_reruns_the_best_designs_with_openfoam_and_says_if_the_ranking_h
     assert fast_order[0] == summary["best"]["parameters"]["actuation.frequency_hz"]
     assert summary["confirm"]["ranking_holds"] is (fast_order[0] < fast_order[1])
     assert json.loads((tmp_path / "out" / "confirm.json").read_text())["designs"]
+
+
+def test_a_rerun_into_a_folder_holding_evaluations_is_refused_unless_overwrite(
+    finished, capsys, tmp_path
+):
+    """Without --resume or --overwrite an earlier study's evaluations are kept, as fsi-run and
+    fsi-sweep keep an earlier run; --confirm takes no negative count."""
+    folder, out, _ = finished
+    held = sorted(p.name for p in (out / "evaluations").iterdir())
+    for extra, named in (([], "--overwrite"), (["--resume", "--confirm", "-1"], "--confirm")):
+        code = design_cli.main([str(folder), "--quiet", *extra])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and named in err[0], err
+    assert sorted(p.name for p in (out / "evaluations").iterdir()) == held
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    assert design_cli.main([str(folder), "--output", str(copy), "--overwrite", "--quiet"]) == 0

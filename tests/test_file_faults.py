@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import fsi_orchestrator
+from fishfsi.cli import design as design_cli
 from fishfsi.cli import modal as modal_cli
 from fishfsi.cli import post as post_cli
 from fishfsi.cli import run as run_cli
@@ -154,6 +155,55 @@ def test_a_damaged_results_file_is_refused_on_resume_in_one_line(done, capsys):
     assert code == 1
     one_line_naming(lines, out / "results.h5", "not a readable results file")
     assert checkpoint.read_bytes() == kept
+
+
+def test_a_checkpoint_resumed_under_another_fluid_model_is_refused(done, capsys):
+    """Half the windows with one fluid, half with another, under one label: refused."""
+    case, out = done
+    before = (out / "results.h5").read_bytes()
+    code, lines = run(capsys, case, "--resume", "--set", "fluid.model=slender_body")
+    assert code == 1
+    one_line_naming(lines, out / "checkpoint.h5", "another case", "fluid.model")
+    assert (out / "results.h5").read_bytes() == before
+
+
+def test_a_results_file_holding_nan_is_refused_on_resume_before_the_set_up(
+    done, capsys, monkeypatch
+):
+    """Damaged data that h5py still reads (NaN in a recorded series) is refused at once, not
+    reported as a diverged run after the resumed windows."""
+    case, out = done
+    with h5py.File(out / "results.h5", "a") as h5:
+        h5["shell/tip_displacement_m"][3] = np.nan
+    built = []
+    monkeypatch.setattr(run_cli, "run_dynamic", lambda *a, **k: built.append(1))
+    code, lines = run(capsys, case, "--resume")
+    assert code == 1 and not built
+    one_line_naming(
+        lines, out / "results.h5", "not a readable results file", "window 4", "--overwrite"
+    )
+
+
+def test_a_run_into_a_sweeps_folder_is_refused(tmp_path, capsys):
+    """fsi-sweep refuses a run's folder; fsi-run refuses a sweep's."""
+    (tmp_path / "case").mkdir()
+    (tmp_path / "case" / "case.toml").write_text(BEAM)
+    (tmp_path / "sweep").mkdir()
+    (tmp_path / "sweep" / "sweep.csv").write_text("waveform,frequency_hz,tip_amplitude_m\n")
+    code, lines = run(capsys, tmp_path / "case", "--output", tmp_path / "sweep")
+    assert code == 2
+    one_line_naming(lines, tmp_path / "sweep", "holds a sweep of fsi-sweep (sweep.csv)")
+    assert sorted(p.name for p in (tmp_path / "sweep").iterdir()) == ["sweep.csv"]
+
+
+def test_a_resume_where_no_run_was_leaves_no_folder(tmp_path, capsys):
+    (tmp_path / "case").mkdir()
+    (tmp_path / "case" / "case.toml").write_text(BEAM)
+    fresh = tmp_path / "never_ran"
+    code, lines = run(capsys, tmp_path / "case", "--resume", "--output", fresh)
+    assert code == 1
+    one_line_naming(lines, fresh / "checkpoint.h5", "no checkpoint to resume from")
+    assert not fresh.exists()
 
 
 # ------------------------------------------------------------------ folders that cannot be written
@@ -428,7 +478,9 @@ def test_results_can_be_read_by_another_process_while_the_run_writes(tmp_path):
     assert seen == [1, 2, 3]
 
 
-@pytest.mark.parametrize("main", [run_cli.main, modal_cli.main, sweep_cli.main, post_cli.main])
+@pytest.mark.parametrize(
+    "main", [run_cli.main, modal_cli.main, sweep_cli.main, post_cli.main, design_cli.main]
+)
 def test_every_command_has_version(main, capsys):
     with pytest.raises(SystemExit) as stop:
         main(["--version"])

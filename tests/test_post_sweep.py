@@ -149,6 +149,21 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,abc1.0,0.01,ok\n",
             "sweep.csv, line 2: frequency_hz = 'abc1.0' is not a number",
         ),
+        (  # cut short while being copied
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,1.0,0.01,ok\nsine,3.0\n",
+            "sweep.csv, line 3: not 4 cells as the header has (a cut or edited table); run "
+            "fsi-sweep into that folder again with --resume",
+        ),
+        (
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,1.0,inf,ok\n",
+            "sweep.csv, line 2: tip_amplitude_m = 'inf' is not finite for a point whose status "
+            "is 'ok'",
+        ),
+        (
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,nan,,failed: crashed\n",
+            "sweep.csv, line 2: frequency_hz = 'nan' is not finite for a point whose status "
+            "is 'failed: crashed'",
+        ),
     ],
 )
 def test_a_damaged_sweep_table_is_refused_in_one_line(tmp_path, capsys, table, expected):

@@ -334,3 +334,18 @@ def test_fsi_post_refuses_a_file_it_did_not_write_in_one_line(tmp_path, capsys, 
     assert post_cli.main([str(tmp_path / name)]) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and line.startswith(f"error: {tmp_path / name}: not a table")
+
+
+def test_a_linear_sweep_in_vacuum_pushes_nothing_and_says_when_it_leaves_small_deflections(
+    tmp_path, capsys
+):
+    """The seed's beam in air at its 25 Hz resonance: no thrust column (nothing to push), and
+    a tip amplitude past a fifth of the 87 mm strip gets a note (the linear model's range)."""
+    args = [str(ROOT / "cases/seed/beam_sweep"), "--frequencies", "10,25", "--waveforms", "sine"]
+    assert sweep_cli.main([*args, "--json", "--quiet", "--output", str(tmp_path)]) == 0
+    out = capsys.readouterr()
+    rows = strict_json(out.out)["rows"]
+    assert all("slender_body_mean_thrust_n" not in r for r in rows)
+    assert rows[0]["tip_amplitude_m"] < 0.2 * 0.087 < rows[1]["tip_amplitude_m"]
+    notes = [line for line in out.err.splitlines() if line.startswith("note:")]
+    assert len(notes) == 1 and "exceeds a fifth of the plate's 87 mm at 1 point(s)" in notes[0]

@@ -399,6 +399,28 @@ def test_sigterm_stops_the_sweep_with_its_rows_kept_and_says_resume(tmp_path, mo
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
 
 
+def test_sigterm_stops_a_linear_sweep_of_a_fish_in_the_tank_in_one_line(tmp_path):
+    """The potential flow's gmsh mesher left SIGTERM at its C default, and a linear sweep was
+    killed without a word (exit 143): the handler is put back after meshing."""
+    out = tmp_path / "sweep"
+    sweep = subprocess.Popen(
+        [sys.executable, "-m", "fishfsi.cli.sweep", str(ROOT / "cases/fixed_head_3Hz")]
+        + ["--set", "fluid.edge_drag=true", "--frequencies", "1:25:0.5", "--output", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert sweep.stderr is not None
+    for line in sweep.stderr:  # the mesh is built before the first point
+        if line.startswith("sweep: point 1/"):
+            break
+    sweep.send_signal(signal.SIGTERM)
+    rest = sweep.stderr.read().strip().splitlines()
+    assert sweep.wait(timeout=60) == EXIT_INTERRUPTED
+    assert rest[-1] == "interrupted: results so far are kept; continue with --resume"
+    assert (out / "sweep.csv").is_file()  # the finished points' rows
+
+
 def test_a_transient_point_with_a_nan_result_fails_the_sweep(tmp_path, monkeypatch, capsys):
     """A run that returns NaN (no exception) is a failed row: exit 1, the other rows kept. A
     figure the run does not give (a beam's thrust) stays NaN without failing."""

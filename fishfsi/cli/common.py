@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
+import signal
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -161,13 +163,42 @@ def emit(summary: dict[str, Any], as_json: bool) -> None:
         print(f"{key:>32}: {value}")
 
 
-def guarded(body: Callable[[], int]) -> int:
-    """Run a CLI body; known failures become one line on stderr and an exit code."""
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM (SLURM's time limit, scancel) as Ctrl-C: a running fluid is shut down and
+    what is finished is kept (a sweep's rows, a study's evaluations). Only where nothing else
+    handles SIGTERM already; the old handler comes back afterwards."""
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
+            yield
+            return
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+RESUMABLE = "results so far are kept; continue with --resume"
+
+
+def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
+    """Run a CLI body; known failures become one line on stderr and an exit code. SIGTERM
+    (SLURM's time limit, scancel) stops it as Ctrl-C does: one line, exit 130;
+    ``interrupted`` says what is kept."""
     from fsi_orchestrator.loop import ResumeError
     from solid_adapter.solvers import SolverError  # the composition root may know adapters
 
     try:
-        return body()
+        with sigterm_as_interrupt():
+            return body()
     except CaseError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -175,7 +206,7 @@ def guarded(body: Callable[[], int]) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
-        why = str(err) or "results so far are kept; continue with --resume"
+        why = str(err) or interrupted
         print(f"interrupted: {why}", file=sys.stderr)
         return EXIT_INTERRUPTED
 
@@ -184,9 +215,20 @@ def run_main(
     body: Callable[[argparse.Namespace], int],
     parser: argparse.ArgumentParser,
     argv: Sequence[str] | None,
+    interrupted: str = RESUMABLE,
 ) -> int:
     args = parser.parse_args(argv)
-    return guarded(lambda: body(args))
+    return guarded(lambda: body(args), interrupted)
+
+
+def output_folder(given: str | None, default: Path) -> Path:
+    """``--output``'s folder; an empty one (a shell variable that was not set) is refused
+    rather than taken for the default."""
+    if given is None:
+        return default
+    if not given.strip():
+        raise CaseError("--output is empty: give a folder, or leave --output out for the default")
+    return Path(given)
 
 
 def atomic_write(path: Path, text: str) -> None:

@@ -45,7 +45,10 @@ def shell_with_fast_fluid(case: Case):
             from fluid_adapter.drag import edge_drag
 
             model.fluid_damping = edge_drag(
-                model, case.fluid.density_kg_m3, case.actuation.frequency_hz
+                model,
+                case.fluid.density_kg_m3,
+                case.actuation.frequency_hz,
+                frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
     return model, added
 

@@ -35,8 +35,8 @@ from ..design.methods import best_of, pareto_front, run_method
 from ..design.outputs import plot_all, write_best_case, write_pareto, write_tables
 from ..design.runner import Evaluator, prepare_output, serve, study_identity
 from ..design.study import Evaluation, Study, load_study
-from .common import EXIT_OK, emit, guarded, json_text
-from .sweep import mpi_world, sigterm_as_interrupt
+from .common import EXIT_OK, add_version, emit, guarded, json_text, output_folder
+from .sweep import mpi_world
 
 
 def progress_line(record: dict, study: Study) -> str:
@@ -142,19 +142,18 @@ def confirm(study: Study, records: list[dict], k: int, output: Path, say) -> dic
     return result
 
 
-def _body(args: argparse.Namespace) -> int:
-    with sigterm_as_interrupt():
-        return _design(args)
-
-
 def _design(args: argparse.Namespace) -> int:
     comm = mpi_world()  # first: a mismatched launch stops before any work
     rank = comm.Get_rank() if comm is not None else 0
     study = load_study(args.study)
-    output = Path(args.output) if args.output else study.directory / "output"
+    output = output_folder(args.output, study.directory / "output")
     output = output.resolve()
     if args.workers < 1:
         raise CaseError(f"--workers must be >= 1, got {args.workers}")
+    if args.confirm < 0:
+        raise CaseError(f"--confirm must be >= 0 (designs to re-run), got {args.confirm}")
+    if args.resume and args.overwrite:
+        raise CaseError("--resume and --overwrite exclude each other: continue, or replace")
     spec = EvaluationSpec.of(study, output)
     if rank != 0:
         serve(comm, spec)
@@ -165,7 +164,7 @@ def _design(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
-    done = prepare_output(output, study_identity(study, spec), args.resume)
+    done = prepare_output(output, study_identity(study, spec), args.resume, args.overwrite)
     evaluator = Evaluator(
         spec,
         done,
@@ -213,6 +212,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         description="A design study: parameters, objectives and constraints over a base case.",
         epilog="study.toml keys, methods and outputs: docs/design.md.",
     )
+    add_version(parser)
     parser.add_argument("study", help="study folder (holding study.toml)")
     parser.add_argument("--output", help="output folder (default: STUDY_DIR/output)")
     parser.add_argument("--json", action="store_true", help="print the study summary as JSON")
@@ -220,6 +220,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--resume",
         action="store_true",
         help="reuse the finished evaluations in --output (same study) and run the rest",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the evaluations an earlier study left in --output",
     )
     parser.add_argument(
         "--workers", type=int, default=1, help="evaluations in parallel processes (default 1)"
@@ -233,7 +238,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--quiet", action="store_true", help="no line per evaluation")
     args = parser.parse_args(argv)
-    return guarded(lambda: _body(args))
+    return guarded(lambda: _design(args))
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ theory on that motion.
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -19,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import AnalysisKind, Waveform
+from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, Waveform
 
 from .compose import shell_with_fast_fluid, without_cfd
 from .swimming import SWIMMING_KEYS, swimming_model
@@ -65,7 +66,12 @@ class LinearModel:
         case, model = self.case, self.model
         drive = DriveSignal.from_case(with_drive(case, frequency_hz, waveform))
         if case.fluid.edge_drag:
-            drag = edge_drag(model, case.fluid.density_kg_m3, frequency_hz)
+            drag = edge_drag(
+                model,
+                case.fluid.density_kg_m3,
+                frequency_hz,
+                frequency_exponent=case.fluid.edge_drag_frequency_exponent,
+            )
             return damped_sweep_response(
                 self.sweep, drive, self.x_static, drag, model, self.tip * 5 + 2
             )
@@ -126,6 +132,8 @@ def linear_sweep(
     swim = None
     if case.analysis.kind is AnalysisKind.SWIMMING:  # speed and turning from each motion
         swim = swimming_model(case, model, xs)
+    pushes = case.fluid.model is not FluidModel.NONE  # in vacuum nothing is pushed
+    length = float(np.ptp(model.mesh.nodes[:, 0]))
     rows = []
     for waveform, f in jobs:
         start = time.perf_counter()
@@ -134,23 +142,29 @@ def linear_sweep(
             times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
             h = response.dof_history(midline * 5 + 2, times)
             tip_z = response.dof_history(np.array([tip * 5 + 2]), times)[:, 0]
-            thrust = mean_thrust_from_shell(
-                xs,
-                half_height,
-                times,
-                h,
-                density_kg_m3=case.fluid.density_kg_m3,
-                period_s=1.0 / f,
-                added_mass_coefficient=case.fluid.added_mass_coefficient,
+            thrust = (
+                mean_thrust_from_shell(
+                    xs,
+                    half_height,
+                    times,
+                    h,
+                    density_kg_m3=case.fluid.density_kg_m3,
+                    period_s=1.0 / f,
+                    added_mass_coefficient=case.fluid.added_mass_coefficient,
+                )
+                if pushes
+                else None
             )
         row = {
             "waveform": waveform.value,
             "frequency_hz": float(f),
             "tip_amplitude_m": float(np.ptp(tip_z) / 2),
-            "slender_body_mean_thrust_n": float(thrust),
             "status": "ok",
         }
-        checked = ["tip_amplitude_m", "slender_body_mean_thrust_n"]
+        checked = ["tip_amplitude_m"]
+        if thrust is not None:
+            row["slender_body_mean_thrust_n"] = float(thrust)
+            checked.append("slender_body_mean_thrust_n")
         if swim is not None and np.all(np.isfinite(h)):
             row.update(swim.row(times, h, f))
             checked += SWIMMING_KEYS
@@ -164,7 +178,22 @@ def linear_sweep(
         rows.append(row)
         if on_row is not None:
             on_row(point_name(waveform, f), row, time.perf_counter() - start)
+    large = [(float(r["tip_amplitude_m"]), r) for r in rows]
+    large = [(a, r) for a, r in large if a > LINEAR_RANGE * length]
+    if large:
+        amplitude, worst = max(large, key=lambda pair: pair[0])
+        print(
+            f"note: the linear response exceeds a fifth of the plate's {1e3 * length:.0f} mm at "
+            f"{len(large)} point(s) ({1e3 * amplitude:.0f} mm at {worst['frequency_hz']:g} Hz "
+            f"{worst['waveform']}): past small deflections, near a lightly damped resonance; "
+            "--method transient gives the large-deflection answer",
+            file=sys.stderr,
+        )
     return rows
+
+
+# a tail amplitude past this fraction of the plate's length is outside the linear model
+LINEAR_RANGE = 0.2
 
 
 def check_modal_sweep(sweep) -> None:

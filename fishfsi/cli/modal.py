@@ -62,7 +62,7 @@ def _body(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-modal", "Mode frequencies of the plate (dry; wet with a fluid).")
     parser.add_argument("--quiet", action="store_true", help="no progress lines")
-    return run_main(_body, parser, argv)
+    return run_main(_body, parser, argv, interrupted="nothing was written; run it again")
 
 
 if __name__ == "__main__":

@@ -23,19 +23,27 @@ from fsi_orchestrator.results import (
     write_failure,
 )
 
+SWEEP_FILES = ("sweep.csv", "sweep_rows")  # what fsi-sweep keeps in its --output
+
 
 def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
     """Before the set-up's seconds: a folder that cannot be written, a --resume without a
     checkpoint, and a folder holding an earlier run (without --resume or --overwrite) each
     fail at once in one line. True when an earlier run is to be replaced (--overwrite): its
     checkpoint goes once the set-up is done (coupling.jacobian_from may still read it)."""
+    checkpoint = output / CHECKPOINT_FILE
+    if resume and not checkpoint.exists():  # before the folder is made: nothing left behind
+        raise ResumeError(f"{checkpoint}: no checkpoint to resume from (run without --resume)")
     try:
         output.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
-    checkpoint = output / CHECKPOINT_FILE
-    if resume and not checkpoint.exists():
-        raise ResumeError(f"{checkpoint}: no checkpoint to resume from (run without --resume)")
+    sweep = [n for n in SWEEP_FILES if (output / n).exists()]
+    if sweep:  # a run's files among a sweep's points would be taken for a point's
+        raise CaseError(
+            f"--output {output}: holds a sweep of fsi-sweep ({', '.join(sweep)}); write the run "
+            "elsewhere with --output"
+        )
     held = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (output / n).exists()]
     if held and not resume and not overwrite:
         raise CaseError(
@@ -43,7 +51,28 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
             "--resume, write elsewhere with --output, or replace it with --overwrite"
         )
     check_writable(output)
+    if resume:
+        check_results_readable(output / RESULTS_FILE)
     return bool(held) and not resume
+
+
+def check_results_readable(results: Path) -> None:
+    """A --resume appends to results.h5: a damaged one is refused before the set-up, where
+    it would read back as a diverged run after minutes of work."""
+    if not results.exists():
+        return
+    fix = "rerun with --overwrite, or restore it"
+    try:
+        bad = first_not_finite(results)
+    except (OSError, KeyError, ValueError, TypeError) as err:
+        raise ResumeError(
+            f"{results}: not a readable results file ({err.__class__.__name__}); {fix}"
+        ) from None
+    if bad is not None:
+        raise ResumeError(
+            f"{results}: not a readable results file ({bad[0]} is not finite from window "
+            f"{bad[1] + 1} on: damaged, or a run that diverged); {fix}"
+        )
 
 
 # the recorded quantities a run's figures come from; coupling statistics may be NaN ("none")
@@ -51,8 +80,8 @@ CHECKED_GROUPS = ("time_s", "shell/", "fluid/")
 CHECKED_SUMMARY = ("tip_amplitude_m", "tip_max_abs_m", "mean_thrust_n", "end_time_s")
 
 
-def check_finite(results: Path, summary: Mapping[str, Any]) -> None:
-    """A run whose results hold NaN or infinity ends with an error, never with exit 0."""
+def first_not_finite(results: Path) -> tuple[str, int] | None:
+    """The recorded quantity (and its row) where a run's results first stop being finite."""
     bad: tuple[str, int] | None = None
     with h5py.File(results, "r", locking=False) as h5:
         names: list[str] = []
@@ -64,6 +93,12 @@ def check_finite(results: Path, summary: Mapping[str, Any]) -> None:
             broken = ~np.isfinite(rows).all(axis=1)
             if broken.any() and (bad is None or np.argmax(broken) < bad[1]):
                 bad = (name, int(np.argmax(broken)))
+    return bad
+
+
+def check_finite(results: Path, summary: Mapping[str, Any]) -> None:
+    """A run whose results hold NaN or infinity ends with an error, never with exit 0."""
+    bad = first_not_finite(results)
     if bad is not None:
         name, row = bad
         raise RuntimeError(

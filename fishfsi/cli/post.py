@@ -19,6 +19,7 @@ import csv
 import json
 import re
 import sys
+import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -99,15 +100,34 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
     if missing:
         raise PostError(f"{csv_path}: not a table fsi-sweep wrote (no column {missing[0]!r})")
     for line, row in enumerate(rows, start=2):  # line 1 is the header
+        if None in row or None in row.values():  # cut short, or cells past the header's
+            raise PostError(
+                f"{csv_path}, line {line}: not {sum(k is not None for k in row)} cells as the "
+                "header has (a cut or edited table); run fsi-sweep into that folder again with "
+                "--resume"
+            )
+        ok = row.get("status", "ok").startswith("ok")
+        needed = SWEEP_COLUMNS[1:] if ok else SWEEP_COLUMNS[1:2]  # a failed point's figures
         for key, text in row.items():
             if key in TEXT_COLUMNS or not text:
                 continue
             try:
-                float(text)
+                value = float(text)
             except (TypeError, ValueError):
                 raise PostError(
                     f"{csv_path}, line {line}: {key} = {text!r} is not a number"
                 ) from None
+            if key in needed and not np.isfinite(value):
+                raise PostError(
+                    f"{csv_path}, line {line}: {key} = {text!r} is not finite for a point "
+                    f"whose status is {row.get('status', 'ok')!r}"
+                )
+        for key in needed:
+            if not row[key]:
+                raise PostError(
+                    f"{csv_path}, line {line}: {key} is empty for a point whose status is "
+                    f"{row.get('status', 'ok')!r}"
+                )
     identity = None
     if (csv_path.parent / "sweep_case.json").is_file():
         try:
@@ -381,6 +401,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     output = Path(args.output) if args.output else found.parent
     try:
         output.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=output):  # a read-only mount lets mkdir pass
+            pass
     except OSError as err:
         print(f"error: --output {output}: cannot write there ({err.strerror})", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -21,7 +21,16 @@ from fsi_orchestrator.periodic import summary_fields as periodic_fields
 from fsi_orchestrator.provenance import case_identity, run_attributes
 from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
 
-from .common import EXIT_OK, atomic_write, base_parser, emit, json_text, load, run_main
+from .common import (
+    EXIT_OK,
+    atomic_write,
+    base_parser,
+    emit,
+    json_text,
+    load,
+    output_folder,
+    run_main,
+)
 from .compose import (
     build_coupled_run,
     is_coupled,
@@ -526,7 +535,7 @@ RUN_SUMMARY_FILE = "summary.json"
 
 def _body(args: argparse.Namespace) -> int:
     case = load(args)
-    output = Path(args.output) if args.output else case.directory / "output"
+    output = output_folder(args.output, case.directory / "output")
     # a dynamic run keeps its summary beside results.h5; another kind only where --output
     # asks for a folder (a modal or static case's answer is the summary alone)
     keep = args.output is not None or case.analysis.kind is AnalysisKind.DYNAMIC
@@ -549,6 +558,13 @@ def _body(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# a bare Ctrl-C; a SIGTERM in the windows ends the window with a checkpoint and says so
+INTERRUPTED = (
+    "the results up to the last checkpoint are kept; continue with --resume (stopped in its "
+    "set-up, a run has none yet: run it again)"
+)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-run", "Run a case: structure alone or coupled with a fluid.")
     parser.add_argument("--output", help="output folder (default: CASE/output)")
@@ -564,7 +580,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--quiet", action="store_true", help="no progress (set-up phases, window lines, bar)"
     )
-    return run_main(_body, parser, argv)
+    return run_main(_body, parser, argv, interrupted=INTERRUPTED)
 
 
 if __name__ == "__main__":

@@ -54,6 +54,7 @@ from .common import (
     emit,
     json_text,
     load,
+    output_folder,
     plain,
     run_main,
 )
@@ -633,35 +634,6 @@ def print_table(rows: list[dict]) -> None:
         )
 
 
-@contextlib.contextmanager
-def sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM (SLURM's time limit, scancel) as Ctrl-C: the running point's fluid is shut
-    down, the finished rows are kept and the sweep says to --resume (exit 130). Only where
-    nothing else handles SIGTERM already; the old handler comes back afterwards."""
-    import signal
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    try:
-        if signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL:
-            yield
-            return
-        previous = signal.signal(signal.SIGTERM, interrupt)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _body(args: argparse.Namespace) -> int:
-    with sigterm_as_interrupt():
-        return _sweep(args)
-
-
 def _sweep(args: argparse.Namespace) -> int:
     comm = mpi_world()  # first: a mismatched launch stops before any work
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
@@ -682,7 +654,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if len(set(waveforms)) < len(waveforms):
         raise CaseError(f"--waveforms {args.waveforms!r}: a waveform is given twice")
     frequencies, waveforms = select_point(frequencies, waveforms, args.point)
-    output = Path(args.output) if args.output else case.directory / "output" / "sweep"
+    output = output_folder(args.output, case.directory / "output" / "sweep")
     start = time.perf_counter()
     points = [point_name(w, f) for w in waveforms for f in frequencies]
     table = SweepTable(output, sweep_identity(case, args.method), waveforms)
@@ -808,7 +780,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "rows; with --point only that point's row); without it such a folder is refused",
     )
     parser.add_argument("--quiet", action="store_true", help="no line per finished point")
-    return run_main(_body, parser, argv)
+    return run_main(_sweep, parser, argv)
 
 
 if __name__ == "__main__":

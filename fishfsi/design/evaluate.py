@@ -256,13 +256,15 @@ def linear_figures(case: Case) -> dict:
     (row,) = linear_sweep(case, [case.actuation.frequency_hz], [case.actuation.waveform])
     if row["status"] != "ok":
         raise RuntimeError(row["status"].removeprefix("failed: "))
-    thrust = row["slender_body_mean_thrust_n"]
-    return {
-        "tip_amplitude_m": row["tip_amplitude_m"],
-        "slender_body_mean_thrust_n": thrust,
-        "mean_thrust_n": thrust,
-        "thrust_source": "slender_body",
-    }
+    figures = {"tip_amplitude_m": row["tip_amplitude_m"]}
+    if "slender_body_mean_thrust_n" in row:  # not in vacuum
+        thrust = row["slender_body_mean_thrust_n"]
+        figures |= {
+            "slender_body_mean_thrust_n": thrust,
+            "mean_thrust_n": thrust,
+            "thrust_source": "slender_body",
+        }
+    return figures
 
 
 def modal_figures(case: Case, objectives: tuple[Objective, ...]) -> dict:

@@ -32,9 +32,11 @@ def study_identity(study: Study, spec: EvaluationSpec) -> dict:
     return json.loads(json.dumps(identity, default=str))
 
 
-def prepare_output(output: Path, identity: dict, resume: bool) -> dict[str, dict]:
-    """The finished records to reuse (by design key) with ``resume``, else none (and the
-    evaluations an earlier study left in ``output`` go)."""
+def prepare_output(
+    output: Path, identity: dict, resume: bool, overwrite: bool = False
+) -> dict[str, dict]:
+    """The finished records to reuse (by design key) with ``resume``, else none. An earlier
+    study's evaluations in ``output`` are refused, or go with ``overwrite``."""
     from .evaluate import atomic_write
 
     evaluations = output / "evaluations"
@@ -60,6 +62,12 @@ def prepare_output(output: Path, identity: dict, resume: bool) -> dict[str, dict
             if record is not None and record.get("status") in ("ok", "infeasible"):
                 done[record["key"]] = record  # a failed design is tried again
     else:
+        held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
+        if held and not overwrite:
+            raise CaseError(
+                f"--output {output}: holds {held} evaluations of an earlier study; continue "
+                "it with --resume, write elsewhere with --output, or replace it with --overwrite"
+            )
         shutil.rmtree(evaluations)
         evaluations.mkdir()
         shutil.rmtree(output / "best_case", ignore_errors=True)  # an earlier study's

@@ -8,6 +8,7 @@ plate's outline stays sealed (the pressure is continuous around the edge).
 
 from __future__ import annotations
 
+import signal
 from collections import defaultdict
 from dataclasses import dataclass
 
@@ -73,9 +74,20 @@ def boundary_polygon(mesh: skfem.Mesh) -> NDArray:
     return mesh.p[:, loop].T.copy()
 
 
+def _restore(handlers: dict) -> None:
+    for signum, handler in handlers.items():
+        try:
+            signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
+        except ValueError:  # not the main thread: it installed nothing either
+            pass
+
+
 def build_fluid_mesh(
     polygon: NDArray, domain: SphereDomain | BoxDomain, sizes: MeshSizes
 ) -> FluidMesh:
+    # gmsh's finalize leaves SIGINT and SIGTERM at their C defaults, and a SIGTERM (SLURM's
+    # time limit) then killed the command without a word: the Python handlers are put back
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     gmsh.initialize(interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
@@ -90,6 +102,7 @@ def build_fluid_mesh(
         points, tets = _extract()
     finally:
         gmsh.finalize()
+        _restore(handlers)
     mesh = skfem.MeshTet(np.ascontiguousarray(points.T), np.ascontiguousarray(tets.T))
     return _classify(mesh, domain, scale=float(np.ptp(polygon[:, 0])))
 

@@ -115,6 +115,7 @@ def _blame_override(message: str, overrides: list[str]) -> str:
         return message
     body = message[len(prefix) :]
     key = body.split(maxsplit=1)[0].rstrip(":") if body.strip() else ""
+    key = key.split("[", 1)[0]  # a list's item: actuation.left_volts[0]
     given = [o for o in overrides if o.split("=", 1)[0].strip() == key]
     return f"--set {given[-1]!r}: {body}" if given else message
 

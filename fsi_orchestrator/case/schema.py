@@ -615,6 +615,15 @@ class Fluid:
         "motion (fluid_adapter/drag.py, benchmarks/fast_fluid_damping.py): the fast model's "
         "fluid damping from a measured source, in transients and the periodic start.",
     )
+    edge_drag_frequency_exponent: float = param(
+        0.0,
+        "edge_drag: r in C_D = C0 KC^-q (f / 3 Hz)^-r, how the drag coefficient changes with the "
+        "drive frequency at a fixed KC. 0: the law as fitted at 3 Hz; 0.5 brings the fast "
+        "model's 1-25 Hz curves to OpenFOAM's (median tail error 29 -> 8 % sine, fitted; "
+        "20 -> 13 % square, a check; docs/benchmarks.md, fast_fluid_accuracy.py).",
+        ge=0,
+        le=2,
+    )
     added_mass_coefficient: float = param(
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )
