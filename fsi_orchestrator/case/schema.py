@@ -618,9 +618,10 @@ class Fluid:
     edge_drag_frequency_exponent: float = param(
         0.0,
         "edge_drag: r in C_D = C0 KC^-q (f / 3 Hz)^-r, how the drag coefficient changes with the "
-        "drive frequency at a fixed KC. 0: the law as fitted at 3 Hz; 0.5 brings the fast "
-        "model's 1-25 Hz curves to OpenFOAM's (median tail error 29 -> 8 % sine, fitted; "
-        "20 -> 13 % square, a check; docs/benchmarks.md, fast_fluid_accuracy.py).",
+        "drive frequency at a fixed KC. 0: the law as fitted at 3 Hz (the calibrated cases' "
+        "default); 0.5 brings the fast model's 1-25 Hz tail amplitudes to OpenFOAM's (median "
+        "error 29 -> 8 % sine, where it was chosen; 20 -> 13 % square), while Lighthill's thrust "
+        "on that motion is 1.4-4 times OpenFOAM's (docs/benchmarks.md, fast_fluid_accuracy.py).",
         ge=0,
         le=2,
     )
