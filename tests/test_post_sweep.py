@@ -105,7 +105,7 @@ def _rows(points):
 def test_fsi_post_draws_the_mesh_reference_and_lists_both_errors(tmp_path, capsys):
     default = json.loads(json.dumps(OPENFOAM_COARSE))
     default["case"]["fluid"]["mesh_level"] = "default"
-    coarse = _rows([(3, 0.008, 0.014), (5, 0.005, 0.011), (7, float("nan"), float("nan"))])
+    coarse = _rows([(3, 0.008, 0.014), (5, 0.005, 0.011), (7, "", "")])  # failed: no figures
     for row, status in zip(coarse, ("ok", "ok", "failed: coupling diverged"), strict=True):
         row["status"] = status
         row["slender_body_mean_thrust_n"] = row["mean_thrust_n"]  # as fsi-sweep writes it
@@ -151,7 +151,7 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
         ),
         (  # cut short while being copied
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,1.0,0.01,ok\nsine,3.0\n",
-            "sweep.csv, line 3: not 4 cells as the header has (a cut or edited table); run "
+            "sweep.csv, line 3: 2 cells where the header has 4 (a cut or edited table); run "
             "fsi-sweep into that folder again with --resume",
         ),
         (
@@ -189,3 +189,14 @@ def test_a_missing_path_and_a_mesh_reference_to_a_run_are_refused_in_one_line(tm
     (tmp_path / "results.h5").write_text("")
     assert post.main([str(tmp_path), "--mesh-reference", str(tmp_path)]) == 2
     assert "--mesh-reference applies to a sweep's sweep.csv" in capsys.readouterr().err
+
+
+def test_a_vacuum_sweep_without_a_thrust_column_is_drawn(tmp_path, capsys):
+    """A linear sweep in vacuum writes no thrust: the amplitude curve is still drawn."""
+    rows = [
+        {"waveform": "sine", "frequency_hz": f, "tip_amplitude_m": a, "status": "ok"}
+        for f, a in ((3, 0.006), (5, 0.004))
+    ]
+    _write_sweep(tmp_path / "vacuum", rows, {"method": "linear", "case": {}})
+    assert post.main([str(tmp_path / "vacuum")]) == 0
+    assert (tmp_path / "vacuum" / "sweep.png").stat().st_size > 10_000

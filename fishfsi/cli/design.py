@@ -33,7 +33,13 @@ from ..design.evaluate import (
 )
 from ..design.methods import best_of, pareto_front, run_method
 from ..design.outputs import plot_all, write_best_case, write_pareto, write_tables
-from ..design.runner import Evaluator, prepare_output, serve, study_identity
+from ..design.runner import (
+    Evaluator,
+    prepare_output,
+    refuse_earlier_study,
+    serve,
+    study_identity,
+)
 from ..design.study import Evaluation, Study, load_study
 from .common import EXIT_OK, add_version, emit, guarded, json_text, output_folder
 from .sweep import mpi_world
@@ -155,6 +161,8 @@ def _design(args: argparse.Namespace) -> int:
     if args.resume and args.overwrite:
         raise CaseError("--resume and --overwrite exclude each other: continue, or replace")
     spec = EvaluationSpec.of(study, output)
+    identity = study_identity(study, spec)
+    refuse_earlier_study(output, identity, args.resume, args.overwrite)  # every rank, first
     if rank != 0:
         serve(comm, spec)
         return EXIT_OK
@@ -164,7 +172,7 @@ def _design(args: argparse.Namespace) -> int:
             print(line, file=sys.stderr, flush=True)
 
     start = time.perf_counter()
-    done = prepare_output(output, study_identity(study, spec), args.resume, args.overwrite)
+    done = prepare_output(output, identity, args.resume, args.overwrite)
     evaluator = Evaluator(
         spec,
         done,

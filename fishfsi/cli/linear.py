@@ -114,11 +114,13 @@ def linear_sweep(
     waveforms: list[Waveform],
     done: frozenset[str] | set[str] = frozenset(),
     on_row: OnRow | None = None,
+    notes: bool = True,
 ) -> list[dict]:
     """The rows of the points not ``done`` (point_name), each handed to ``on_row`` as it is
     finished. A step without a finite answer (a singular or indefinite tangent about the
     mean-voltage equilibrium) raises SweepError naming the step; a point whose response is
-    not finite is a failed row."""
+    not finite is a failed row. ``notes``: say on stderr when the response leaves small
+    deflections."""
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
     if not jobs:
         return []
@@ -179,8 +181,8 @@ def linear_sweep(
         if on_row is not None:
             on_row(point_name(waveform, f), row, time.perf_counter() - start)
     large = [(float(r["tip_amplitude_m"]), r) for r in rows]
-    large = [(a, r) for a, r in large if a > LINEAR_RANGE * length]
-    if large:
+    large = [(a, r) for a, r in large if np.isfinite(a) and a > LINEAR_RANGE * length]
+    if large and notes:
         amplitude, worst = max(large, key=lambda pair: pair[0])
         print(
             f"note: the linear response exceeds a fifth of the plate's {1e3 * length:.0f} mm at "

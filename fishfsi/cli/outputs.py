@@ -20,6 +20,7 @@ from fsi_orchestrator.results import (
     MIN_FREE_BYTES,
     RESULTS_FILE,
     check_writable,
+    read_checkpoint,
     write_failure,
 )
 
@@ -52,15 +53,20 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
         )
     check_writable(output)
     if resume:
-        check_results_readable(output / RESULTS_FILE)
+        check_results_readable(output / RESULTS_FILE, checkpoint)
     return bool(held) and not resume
 
 
-def check_results_readable(results: Path) -> None:
-    """A --resume appends to results.h5: a damaged one is refused before the set-up, where
-    it would read back as a diverged run after minutes of work."""
+def check_results_readable(results: Path, checkpoint: Path) -> None:
+    """A --resume appends to results.h5 after the checkpoint's windows: a damaged one is
+    refused before the set-up, where it would read back as a diverged run after minutes of
+    work. Rows after the checkpoint are replaced by the resumed run and not checked."""
     if not results.exists():
         return
+    try:
+        windows = int(read_checkpoint(checkpoint)[0]["window"])
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError):
+        return  # the checkpoint's own check refuses it, in its words
     fix = "rerun with --overwrite, or restore it"
     try:
         bad = first_not_finite(results)
@@ -68,7 +74,7 @@ def check_results_readable(results: Path) -> None:
         raise ResumeError(
             f"{results}: not a readable results file ({err.__class__.__name__}); {fix}"
         ) from None
-    if bad is not None:
+    if bad is not None and bad[1] < windows:
         raise ResumeError(
             f"{results}: not a readable results file ({bad[0]} is not finite from window "
             f"{bad[1] + 1} on: damaged, or a run that diverged); {fix}"

@@ -37,8 +37,8 @@ from .swimming import plot_swimming_sweep  # noqa: E402
 
 def _thrust(row: dict) -> float:
     """The run's own thrust (OpenFOAM's) where it has one, else the slender-body estimate."""
-    value = float(row.get("mean_thrust_n") or "nan")
-    return value if np.isfinite(value) else float(row["slender_body_mean_thrust_n"])
+    value = _float(row, "mean_thrust_n")
+    return value if np.isfinite(value) else _float(row, "slender_body_mean_thrust_n")
 
 
 # The seed's figures for the original fish, head held, square wave
@@ -101,10 +101,12 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
         raise PostError(f"{csv_path}: not a table fsi-sweep wrote (no column {missing[0]!r})")
     for line, row in enumerate(rows, start=2):  # line 1 is the header
         if None in row or None in row.values():  # cut short, or cells past the header's
+            header = sum(k is not None for k in row)
+            cells = sum(v is not None for k, v in row.items() if k is not None)
+            cells += len(row.get(None) or [])
             raise PostError(
-                f"{csv_path}, line {line}: not {sum(k is not None for k in row)} cells as the "
-                "header has (a cut or edited table); run fsi-sweep into that folder again with "
-                "--resume"
+                f"{csv_path}, line {line}: {cells} cells where the header has {header} (a cut "
+                "or edited table); run fsi-sweep into that folder again with --resume"
             )
         ok = row.get("status", "ok").startswith("ok")
         needed = SWEEP_COLUMNS[1:] if ok else SWEEP_COLUMNS[1:2]  # a failed point's figures

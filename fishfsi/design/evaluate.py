@@ -253,7 +253,9 @@ def linear_figures(case: Case) -> dict:
     from ..cli.linear import linear_sweep
 
     case = without_cfd(case)
-    (row,) = linear_sweep(case, [case.actuation.frequency_hz], [case.actuation.waveform])
+    (row,) = linear_sweep(
+        case, [case.actuation.frequency_hz], [case.actuation.waveform], notes=False
+    )
     if row["status"] != "ok":
         raise RuntimeError(row["status"].removeprefix("failed: "))
     figures = {"tip_amplitude_m": row["tip_amplitude_m"]}

@@ -32,6 +32,33 @@ def study_identity(study: Study, spec: EvaluationSpec) -> dict:
     return json.loads(json.dumps(identity, default=str))
 
 
+def refuse_earlier_study(output: Path, identity: dict, resume: bool, overwrite: bool) -> None:
+    """An earlier study's evaluations are kept unless --resume (of the same study) or
+    --overwrite says otherwise. A read alone: every MPI rank calls it before rank 0 changes
+    anything, so all stop together (a rank waiting in serve() for a study that rank 0 refused
+    would wait forever)."""
+    evaluations = output / "evaluations"
+    identity_file = output / IDENTITY_FILE
+    if resume and identity_file.is_file():
+        try:
+            old = json.loads(identity_file.read_text())
+        except (OSError, ValueError):
+            old = None
+        if old != identity:
+            raise CaseError(
+                f"--resume: {output} holds evaluations of another study (its study.toml, "
+                "base case or version differ); use another --output, or drop --resume"
+            )
+    if resume or overwrite or not evaluations.is_dir():
+        return
+    held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
+    if held:
+        raise CaseError(
+            f"--output {output}: holds {held} evaluations of an earlier study; continue it "
+            "with --resume, write elsewhere with --output, or replace it with --overwrite"
+        )
+
+
 def prepare_output(
     output: Path, identity: dict, resume: bool, overwrite: bool = False
 ) -> dict[str, dict]:
@@ -46,28 +73,13 @@ def prepare_output(
         raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
     identity_file = output / IDENTITY_FILE
     done: dict[str, dict] = {}
+    refuse_earlier_study(output, identity, resume, overwrite)
     if resume:
-        if identity_file.is_file():
-            try:
-                old = json.loads(identity_file.read_text())
-            except (OSError, ValueError):
-                old = None
-            if old != identity:
-                raise CaseError(
-                    f"--resume: {output} holds evaluations of another study (its study.toml, "
-                    "base case or version differ); use another --output, or drop --resume"
-                )
         for folder in sorted(evaluations.iterdir()):
             record = read_record(folder)
             if record is not None and record.get("status") in ("ok", "infeasible"):
                 done[record["key"]] = record  # a failed design is tried again
     else:
-        held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
-        if held and not overwrite:
-            raise CaseError(
-                f"--output {output}: holds {held} evaluations of an earlier study; continue "
-                "it with --resume, write elsewhere with --output, or replace it with --overwrite"
-            )
         shutil.rmtree(evaluations)
         evaluations.mkdir()
         shutil.rmtree(output / "best_case", ignore_errors=True)  # an earlier study's

@@ -78,7 +78,7 @@ def _restore(handlers: dict) -> None:
     for signum, handler in handlers.items():
         try:
             signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
-        except ValueError:  # not the main thread: it installed nothing either
+        except ValueError:  # off the main thread Python cannot put one back: mesh on it
             pass
 
 
@@ -88,8 +88,8 @@ def build_fluid_mesh(
     # gmsh's finalize leaves SIGINT and SIGTERM at their C defaults, and a SIGTERM (SLURM's
     # time limit) then killed the command without a word: the Python handlers are put back
     handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    gmsh.initialize(interruptible=False)
     try:
+        gmsh.initialize(interruptible=False)
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("fluid")
         plate = _geometry(polygon, domain)
