@@ -135,11 +135,14 @@ def to_jsonable(value: Any) -> Any:
     """Plain JSON values; a figure that is not finite (an uncertainty from one period, a failed
     point's amplitude) becomes null, since strict readers (jq, JavaScript) refuse NaN and
     Infinity."""
-    value = plain(value)
     if isinstance(value, dict):
         return {k: to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, list):
+    if isinstance(value, list | tuple):
         return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
