@@ -1,17 +1,21 @@
 """The fast model against OpenFOAM over a frequency curve: run time against error.
 
 The fast model (``fsi-sweep --method linear``: potential flow in the tank, the edge drag
-fitted to OpenFOAM at 3 Hz, Lighthill's thrust on its motion) is run at the frequencies and
-waveforms of finished OpenFOAM transient sweeps of the same case, and each point's tail
-amplitude and mean thrust are set beside OpenFOAM's periodic estimate (or its last period).
-The fast curve is timed in this run; OpenFOAM's cost is the sum of each point's window times
-in its results.h5 (set-up excluded). Reproduce::
+fitted to OpenFOAM, Lighthill's thrust on its motion) is run at the frequencies and waveforms
+of OpenFOAM's transient curves of the same case, and each point's tail amplitude and mean
+thrust are set beside OpenFOAM's periodic estimate. Without sweep folders the reference is
+benchmarks/data/openfoam_held_fish_coarse.toml, the main job's scene on the coarse level
+(its wall times per point); with them, the finished sweeps' rows and the window times in their
+results.h5. The fast curve is timed in this run. Reproduce::
 
     .venv/bin/python benchmarks/fast_fluid_accuracy.py cases/fixed_head_3Hz \\
-        SWEEP [SWEEP ...] --set fluid.mesh_level=coarse
+        --set fluid.mesh_level=coarse [--fit-exponent sine]
 
-A later sweep's row replaces an earlier one's at the same point (e.g. a rerun with iterated
-windows). The fast model gets ``fluid.edge_drag=true`` on top of ``--set``.
+``--fit-exponent WAVEFORM`` fits ``fluid.edge_drag_frequency_exponent`` r (scipy, bounded
+0-1.5) to OpenFOAM's tail amplitudes on that waveform's curve (least squares of the log
+ratio) and reports both curves at the fitted r. A later sweep's row replaces an earlier one's
+at the same point (e.g. a rerun with iterated windows). The fast model gets
+``fluid.edge_drag=true`` on top of ``--set``.
 """
 
 from __future__ import annotations
@@ -21,10 +25,12 @@ import csv
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 import h5py
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -66,6 +72,24 @@ def cfd_points(sweeps: list[Path]) -> dict[tuple[str, float], dict]:
     return points
 
 
+REFERENCE = Path(__file__).resolve().parent / "data" / "openfoam_held_fish_coarse.toml"
+
+
+def reference_points(path: Path = REFERENCE) -> dict[tuple[str, float], dict]:
+    """OpenFOAM's curves from the reference file, keyed as cfd_points keys them."""
+    data = tomllib.loads(path.read_text())
+    points: dict[tuple[str, float], dict] = {}
+    for waveform, table in data.items():
+        for i, f in enumerate(table["frequency_hz"]):
+            points[(waveform, float(f))] = {
+                "tail_m": 1e-3 * table["tail_mm"][i],
+                "thrust_n": 1e-3 * table["thrust_mn"][i],
+                "periodic": bool(table["periodic"][i]),
+                "wall_s": 60.0 * table["wall_min"][i],
+            }
+    return points
+
+
 def fast_curve(case: Path, sets: list[str], points) -> tuple[dict, float]:
     """The fast sweep at the same points, and its wall time (set-up included)."""
     rows: dict[tuple[str, float], dict] = {}
@@ -91,14 +115,36 @@ def fast_curve(case: Path, sets: list[str], points) -> tuple[dict, float]:
     return rows, wall
 
 
+def fit_exponent(case: Path, sets: list[str], cfd: dict, waveform: str) -> float:
+    """r minimizing the squared log ratio of the fast tail to OpenFOAM's on one curve."""
+    points = {key: value for key, value in cfd.items() if key[0] == waveform}
+
+    def misfit(r: float) -> float:
+        fast, _ = fast_curve(case, [*sets, f"fluid.edge_drag_frequency_exponent={r:.4f}"], points)
+        logs = [np.log(fast[k]["tail_m"] / points[k]["tail_m"]) for k in points]
+        print(f"  r = {r:.3f}: rms log error of the tail {np.sqrt(np.mean(np.square(logs))):.4f}")
+        return float(np.mean(np.square(logs)))
+
+    fit = minimize_scalar(misfit, bounds=(0.0, 1.5), method="bounded", options={"xatol": 0.01})
+    print(f"fitted r = {fit.x:.3f} on the {waveform} curve ({fit.nfev} fast curves)")
+    return float(fit.x)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("case", type=Path)
-    parser.add_argument("sweeps", type=Path, nargs="+", help="OpenFOAM transient sweep folders")
+    parser.add_argument(
+        "sweeps", type=Path, nargs="*", help="OpenFOAM transient sweep folders (default: the file)"
+    )
     parser.add_argument("--set", action="append", default=[], dest="sets")
+    parser.add_argument("--fit-exponent", choices=("sine", "square"), default=None)
     args = parser.parse_args()
-    cfd = cfd_points(args.sweeps)
-    fast, fast_wall = fast_curve(args.case, args.sets, cfd)
+    cfd = cfd_points(args.sweeps) if args.sweeps else reference_points()
+    sets = list(args.sets)
+    if args.fit_exponent:
+        fitted = fit_exponent(args.case, sets, cfd, args.fit_exponent)
+        sets.append(f"fluid.edge_drag_frequency_exponent={fitted:.3f}")
+    fast, fast_wall = fast_curve(args.case, sets, cfd)
     print(
         "| waveform | f [Hz] | OpenFOAM tail [mm] | fast tail [mm] | error | OpenFOAM thrust "
         "[mN] | fast thrust [mN] | error | OpenFOAM windows [min] |"

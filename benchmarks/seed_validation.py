@@ -85,6 +85,8 @@ class FastModel:
 
     cache: dict
     evaluations: int = 0
+    # the edge drag linearized on every harmonic's velocity (False: the fundamental's alone)
+    all_harmonics: bool = True
 
     def model(self, case):
         model = build_shell_model(case)
@@ -97,6 +99,7 @@ class FastModel:
                 model,
                 case.fluid.density_kg_m3,
                 case.actuation.frequency_hz,
+                all_harmonics=self.all_harmonics,
                 frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
         return model

@@ -21,7 +21,10 @@ amplitudes of 1, 7.8 and 17.8 mm.
 One frequency cannot tell how the coefficient changes with it at a fixed KC. On the coupled
 curves of the same scene (1-25 Hz) the 3 Hz law damps the held fish's second mode away, where
 OpenFOAM keeps its resonance: ``frequency_exponent`` r scales C0 by (f / 3 Hz)^-r
-(``fluid.edge_drag_frequency_exponent``; benchmarks/fast_fluid_accuracy.py).
+(``fluid.edge_drag_frequency_exponent``). Fitted to those curves r is 0.4
+(benchmarks/fast_fluid_accuracy.py --fit-exponent), between a drag of separated flow alone
+(r = 0) and the Stokes layer's, whose coefficient at a fixed KC goes as beta^-1/2 with the
+frequency parameter beta = h^2 f / nu (Wang 1968, r = 0.5).
 """
 
 from __future__ import annotations

@@ -144,35 +144,38 @@ def test_the_flume_case_runs_its_fast_model_at_the_flume_speed():
 
 # The coarse flume's mean plate force (thrust less skin friction) on the original robot's
 # free-body motion, 18 Hz square wave (benchmarks/swimming_flume.py; docs/swimming.md)
-CFD_PLATE_FORCE_N = {0.05: 0.0049, 0.8: -0.1742}
+CFD_PLATE_FORCE_N = {0.05: 0.1150, 0.8: -0.2442}
 
 
 @pytest.mark.parametrize("speed", sorted(CFD_PLATE_FORCE_N))
-def test_the_pressure_share_of_the_thrust_follows_the_flume_where_lighthills_does_not(speed):
-    """Lighthill's thrust less skin friction misses the CFD by 0.4-0.6 N; its share carried
-    by the pressure (no suction at the sharp edges) comes within 0.06 N."""
+def test_the_pressure_share_of_the_thrust_is_closer_to_the_flume_than_lighthills(speed):
+    """Lighthill's thrust less skin friction misses the CFD by 1.2 N; its share carried by
+    the pressure (no suction at the sharp edges) by 0.08-0.27 N."""
     from fishfsi.cli.linear import swimming_summary
 
     case = load_case(FLUME, overrides=["fluid.model=potential", f"swimming.speed_m_s={speed}"])
     row = swimming_summary(case)
     friction, cfd = row["skin_friction_drag_n"], CFD_PLATE_FORCE_N[speed]
-    assert abs(row["pressure_thrust_at_speed_n"] - friction - cfd) < 0.06
-    assert row["lighthill_thrust_at_speed_n"] - friction - cfd > 0.4
+    pressure_gap = row["pressure_thrust_at_speed_n"] - friction - cfd
+    lighthill_gap = row["lighthill_thrust_at_speed_n"] - friction - cfd
+    assert 0 < pressure_gap < 0.3
+    assert lighthill_gap > 1.0
+    assert lighthill_gap > 4 * pressure_gap
 
 
-def test_with_the_pressure_thrust_the_free_original_robot_does_not_swim():
-    """The free-body motion makes no pressure thrust at rest (the recoiling nose pulls back
-    what the fin pushes), so the pressure model finds no self-propelled speed, where
-    Lighthill's finds 1.10 m/s (measured 0.72 m/s): the model's free motion, not only its
-    thrust, is off (docs/swimming.md)."""
+def test_the_free_original_robots_speed_with_either_thrust_model():
+    """At 18 Hz square the robot swam 0.72 m/s (Sec. 4.4). The pressure's share of the
+    thrust swims the model's free robot within 10 % of that, Lighthill's thrust at twice it;
+    the CFD flume on the same motion finds 0.23 m/s (docs/swimming.md), so neither settles
+    the free motion."""
     from fishfsi.cli.linear import swimming_summary
 
     swim = ROOT / "cases" / "swim_original_18Hz"
     pressure = swimming_summary(load_case(swim, overrides=["swimming.thrust_model=pressure"]))
-    assert pressure["swimming_speed_m_s"] == 0.0
-    assert pressure["thrust_at_speed_n"] == pressure["pressure_thrust_at_speed_n"] < 0
+    assert pressure["thrust_at_speed_n"] == pressure["pressure_thrust_at_speed_n"]
+    assert pressure["swimming_speed_m_s"] == pytest.approx(0.72, rel=0.10)
     lighthill = swimming_summary(load_case(swim))
-    assert lighthill["swimming_speed_m_s"] == pytest.approx(1.10, abs=0.01)
+    assert lighthill["swimming_speed_m_s"] > 1.8 * 0.72
 
 
 @OPENFOAM
@@ -230,14 +233,16 @@ def test_fsi_run_of_the_flume_case_reports_the_cfd_and_the_model(tmp_path):
     assert "flume: OpenFOAM" in done.stderr
 
 
-def test_a_head_on_stiff_springs_makes_the_pressure_share_swim():
+def test_a_head_on_stiff_springs_makes_the_pressure_share_swim_faster():
     """The same robot with its head on springs of 1e4 N/m (boundary.head = "elastic", a
-    sensitivity study): the recoil is held, the pressure share makes thrust at rest and the
-    robot swims (docs/swimming.md: 1.01 m/s); free, it does not."""
+    sensitivity study): the recoil is held and the pressure share swims it at 1.32 m/s
+    (docs/swimming.md), twice the free robot's 0.67 m/s."""
     from fishfsi.cli.linear import swimming_summary
 
     swim = ROOT / "cases" / "swim_original_18Hz"
     held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4"]
     row = swimming_summary(load_case(swim, overrides=[*held, "swimming.thrust_model=pressure"]))
-    assert row["swimming_speed_m_s"] == pytest.approx(1.01, abs=0.02)
+    free = swimming_summary(load_case(swim, overrides=["swimming.thrust_model=pressure"]))
+    assert row["swimming_speed_m_s"] == pytest.approx(1.32, abs=0.02)
     assert row["pressure_thrust_at_speed_n"] > 0
+    assert row["swimming_speed_m_s"] > 1.5 * free["swimming_speed_m_s"]

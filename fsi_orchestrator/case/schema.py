@@ -616,12 +616,12 @@ class Fluid:
         "fluid damping from a measured source, in transients and the periodic start.",
     )
     edge_drag_frequency_exponent: float = param(
-        0.0,
+        0.4,
         "edge_drag: r in C_D = C0 KC^-q (f / 3 Hz)^-r, how the drag coefficient changes with the "
-        "drive frequency at a fixed KC. 0: the law as fitted at 3 Hz (the calibrated cases' "
-        "default); 0.5 brings the fast model's 1-25 Hz tail amplitudes to OpenFOAM's (median "
-        "error 29 -> 8 % sine, where it was chosen; 20 -> 13 % square), while Lighthill's thrust "
-        "on that motion is 1.4-4 times OpenFOAM's (docs/benchmarks.md, fast_fluid_accuracy.py).",
+        "drive frequency at a fixed KC. 0.4 is fitted to OpenFOAM's coupled 1-25 Hz tail "
+        "amplitudes of the held fish (sine 0.41, square 0.39, fitted apart; median error 7-8 %, "
+        "against 20-29 % with 0, the 3 Hz law alone); Lighthill's thrust on that motion stays "
+        "1.2-4 times OpenFOAM's (docs/benchmarks.md, fast_fluid_accuracy.py --fit-exponent).",
         ge=0,
         le=2,
     )
