@@ -117,7 +117,13 @@ def fast_curve(case: Path, sets: list[str], points) -> tuple[dict, float]:
 
 def fit_exponent(case: Path, sets: list[str], cfd: dict, waveform: str) -> float:
     """r minimizing the squared log ratio of the fast tail to OpenFOAM's on one curve."""
-    points = {key: value for key, value in cfd.items() if key[0] == waveform}
+    points = {
+        key: value
+        for key, value in cfd.items()
+        if key[0] == waveform and np.isfinite(value["tail_m"]) and value["tail_m"] > 0
+    }
+    if not points:
+        raise SystemExit(f"--fit-exponent {waveform}: OpenFOAM has no finished {waveform} point")
 
     def misfit(r: float) -> float:
         fast, _ = fast_curve(case, [*sets, f"fluid.edge_drag_frequency_exponent={r:.4f}"], points)
@@ -147,7 +153,7 @@ def main() -> None:
     fast, fast_wall = fast_curve(args.case, sets, cfd)
     print(
         "| waveform | f [Hz] | OpenFOAM tail [mm] | fast tail [mm] | error | OpenFOAM thrust "
-        "[mN] | fast thrust [mN] | error | OpenFOAM windows [min] |"
+        "[mN] | fast thrust [mN] | error | OpenFOAM wall [min] |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
     errors: dict[str, list[tuple[float, float]]] = {}
@@ -174,7 +180,7 @@ def main() -> None:
             f"{100 * np.median(thrust):.0f} % (max {100 * thrust.max():.0f} %)"
         )
     print(
-        f"fast curves {fast_wall:.1f} s against OpenFOAM's windows {cfd_wall / 3600:.1f} h "
+        f"fast curves {fast_wall:.1f} s against OpenFOAM's {cfd_wall / 3600:.1f} h "
         f"(x{cfd_wall / fast_wall:.0f})"
     )
 

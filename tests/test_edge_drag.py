@@ -138,6 +138,7 @@ def test_the_fast_curve_against_openfoams_with_and_without_the_frequency_exponen
                 assert ratio < 0.65, waveform
 
 
+@pytest.mark.slow
 def test_the_default_frequency_exponent_is_the_one_openfoams_curves_fit():
     """Fitted apart, OpenFOAM's sine and square curves (1-25 Hz, 13 points each) give
     r = 0.41 and 0.39 (least squares of the log tail ratio); the schema's default is the

@@ -96,10 +96,10 @@ def test_thrust_peaks_where_the_rig_measured_it(thrust_curve):
 
 
 def test_the_thrust_curve_is_finite_and_positive_and_the_harmonics_are_damped(thrust_curve):
-    """Every point finite and pushing forward. At 18 Hz the square wave's harmonics no longer
-    ring the fin: with the drag linearized on every harmonic's velocity the thrust is under
-    half of what it is linearized on the fundamental alone (0.57 against 1.59 N), where the
-    nonlinear transient of the same case agrees with the former (docs/validation.md)."""
+    """Every point finite and pushing forward. At 18 Hz the drag, linearized on every
+    harmonic's velocity, keeps the square wave's harmonics from ringing the fin: the thrust is
+    under half of what the drag linearized on the fundamental alone gives (0.57 against
+    1.59 N on the frozen case; docs/validation.md)."""
     assert all(np.isfinite(v) and v > 0 for v in thrust_curve.values())
     fundamental = sv.FastModel(cache={}, all_harmonics=False)
     ringing = fundamental.orbit(_frozen("thrust_rig", "actuation.frequency_hz=18"))["thrust_n"]
