@@ -40,6 +40,8 @@ from scipy.special import gamma
 DRAG_C0 = 9.82
 DRAG_Q = 0.224
 DRAG_FIT_HZ = 3.0  # the drive frequency of the fitted motion
+# r, fitted to OpenFOAM's coupled 1-25 Hz curves (fluid.edge_drag_frequency_exponent's default)
+DRAG_FREQUENCY_EXPONENT = 0.4
 NDOF = 5  # the shell's DOFs per node (u_x, u_y, u_z, theta_1, theta_2)
 # below this normal speed the power law is smoothed (0.02 % of the force at 0.05 m/s)
 SMOOTH_SPEED_M_S = 1e-3
@@ -100,7 +102,7 @@ def edge_drag(
     c0: float = DRAG_C0,
     q: float = DRAG_Q,
     all_harmonics: bool = True,
-    frequency_exponent: float = 0.0,
+    frequency_exponent: float = DRAG_FREQUENCY_EXPONENT,
 ) -> EdgeDrag:
     """The drag law on a shell model's nodes (lumped nodal areas, local plate height), its
     coefficient scaled by (f / DRAG_FIT_HZ)^-frequency_exponent away from the fit's 3 Hz."""

@@ -46,13 +46,18 @@ def test_the_frequency_exponent_leaves_the_3hz_fit_and_scales_the_rest():
     case = load_case(ROOT / "cases" / "fixed_head_3Hz", ["fluid.model=none", "mesh.level=coarse"])
     model = build_shell_model(case)
     for f in (3.0, 12.0):
-        plain = edge_drag(model, 1820.0, f).coefficients
+        plain = edge_drag(model, 1820.0, f, frequency_exponent=0.0).coefficients
         scaled = edge_drag(model, 1820.0, f, frequency_exponent=0.5).coefficients
         np.testing.assert_allclose(scaled, plain * (f / 3.0) ** -0.5, rtol=1e-12)
     np.testing.assert_array_equal(
         edge_drag(model, 1820.0, 3.0, frequency_exponent=0.5).coefficients,
-        edge_drag(model, 1820.0, 3.0).coefficients,
+        edge_drag(model, 1820.0, 3.0, frequency_exponent=0.0).coefficients,
     )
+    # the case key's default is the law's
+    from fluid_adapter.drag import DRAG_FREQUENCY_EXPONENT
+    from fsi_orchestrator.case.schema import Fluid
+
+    assert Fluid().edge_drag_frequency_exponent == DRAG_FREQUENCY_EXPONENT
 
 
 def test_law_reproduces_openfoams_damping():
