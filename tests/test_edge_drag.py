@@ -108,15 +108,12 @@ def test_fast_transient_with_drag_is_periodic_near_openfoams_amplitude(tmp_path)
     assert rows[0]["tip_amplitude_m"] == pytest.approx(periods[1], rel=0.06)
 
 
-# OpenFOAM's coupled curves of the main job's scene on the coarse level (periodic estimates;
-# docs/validation.md, "Thrust against frequency with OpenFOAM")
-REFERENCE = ROOT / "benchmarks" / "data" / "openfoam_held_fish_coarse.toml"
-
-
 def _openfoam_tail_mm() -> dict[tuple[str, float], float]:
+    """OpenFOAM's coupled tail amplitudes of the main job's scene on the coarse level
+    (benchmarks/data/openfoam_held_fish_coarse.toml; docs/validation.md)."""
     from fast_fluid_accuracy import reference_points
 
-    return {key: 1e3 * point["tail_m"] for key, point in reference_points(REFERENCE).items()}
+    return {key: 1e3 * point["tail_m"] for key, point in reference_points().items()}
 
 
 @pytest.mark.parametrize("exponent, within", [(0.0, None), (None, 0.10)])
@@ -128,7 +125,7 @@ def test_the_fast_curve_against_openfoams_with_and_without_the_frequency_exponen
     from fsi_orchestrator.case.schema import Waveform
 
     sets = ["fluid.model=potential", "fluid.domain=tank", "fluid.mesh_level=coarse"]
-    sets.append("fluid.edge_drag=true")
+    sets += ["fluid.edge_drag=true"]
     if exponent is not None:
         sets.append(f"fluid.edge_drag_frequency_exponent={exponent}")
     case = load_case(ROOT / "cases" / "fixed_head_3Hz", sets)
@@ -153,7 +150,7 @@ def test_the_default_frequency_exponent_is_the_one_openfoams_curves_fit():
     from fsi_orchestrator.case.schema import Fluid
 
     case = ROOT / "cases" / "fixed_head_3Hz"
-    points = reference_points(REFERENCE)
+    points = reference_points()
     default = Fluid().edge_drag_frequency_exponent
     assert fit_exponent(case, ["fluid.mesh_level=coarse"], points, "sine") == pytest.approx(
         default, abs=0.03
