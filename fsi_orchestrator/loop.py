@@ -17,7 +17,13 @@ from typing import Any
 import numpy as np
 
 from .coupling import Coupling
-from .participant import DISPLACEMENT, Monitored, Participant, WritesFlowFields
+from .participant import (
+    DISPLACEMENT,
+    Monitored,
+    Participant,
+    ParticipantStopped,
+    WritesFlowFields,
+)
 from .provenance import IDENTITY_ATTR, identity_changes
 from .results import (
     CHECKPOINT_FILE,
@@ -84,6 +90,7 @@ class WindowLoop:
         self.stop = stop or (lambda results: None)
         self.stopped: str | None = None  # why the run ended before its last window
         self.window = 0
+        self._checkpointed: int | None = None  # the window of the last checkpoint written
         self._flow: dict[str, PvdSeries] = {}
         self._flow_keep_until: float | None = None
 
@@ -118,7 +125,10 @@ class WindowLoop:
                 self.stopped = self.stop(results)
             while self.window < self.schedule.n_windows and self.stopped is None:
                 start = wallclock.perf_counter()
-                stats = self._solve_window()
+                try:
+                    stats = self._solve_window()
+                except ParticipantStopped as err:  # the job's time limit reached the solver
+                    raise KeyboardInterrupt(self._stopped_in_window(err)) from None
                 self.window += 1
                 row = self._record(results, vtk, wallclock.perf_counter() - start, stats)
                 self.stopped = self.stop(results)
@@ -206,6 +216,15 @@ class WindowLoop:
         }
 
     # ----------------------------------------------------------------- checkpoints
+    def _stopped_in_window(self, err: ParticipantStopped) -> str:
+        where = f"window {self.window + 1} did not finish: {err}"
+        if self._checkpointed is None:
+            return f"{where}; no checkpoint was written yet: run it again"
+        return (
+            f"{where}; the checkpoint after window {self._checkpointed} is kept: "
+            "continue with --resume"
+        )
+
     def _checkpoint(self, path: Path) -> None:
         loop_state: dict[str, Any] = {"window": self.window, "dt_s": self.schedule.dt}
         if self.coupling is not None:
@@ -213,11 +232,13 @@ class WindowLoop:
         identity = self.output.case_identity
         attributes = {IDENTITY_ATTR: identity} if identity is not None else {}
         write_checkpoint(path, loop_state, {self.solid.name: self.solid.save_state()}, attributes)
+        self._checkpointed = self.window
 
     def _resume(self, path: Path) -> None:
         self.window = load_checkpoint(
             path, self.solid, self.coupling, self.schedule.dt, self.output.case_identity
         )
+        self._checkpointed = self.window
 
 
 def load_checkpoint(

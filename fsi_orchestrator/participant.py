@@ -43,6 +43,12 @@ class ParticipantSetupError(RuntimeError):
     or calling it a divergence."""
 
 
+class ParticipantStopped(KeyboardInterrupt):
+    """A participant's solver was stopped from outside (SIGTERM, SIGINT or SIGHUP: a
+    scheduler's time limit or scancel signals every process of the job, the solver too). Not
+    a failure of the run: it ends as an interruption does, with what it has checkpointed."""
+
+
 @dataclass(frozen=True)
 class InterfaceMesh:
     """Reference geometry of a participant's coupling interface."""

@@ -248,6 +248,51 @@ def test_killed_coupled_run_resumes_to_the_same_result(world_searchable, driver)
             assert np.abs(x - y).max() <= 1e-6 * np.abs(x).max(), name
 
 
+def test_a_fluid_stopped_by_the_schedulers_sigterm_ends_the_run_as_an_interruption(
+    world_searchable,
+):
+    """SLURM's time limit (and scancel) sends SIGTERM to every process of the job step, so
+    pimpleFoam may die in the middle of a window: the run ends in one line that names the
+    window and the checkpoint kept, exit 130 (not a "coupling diverged" with a log's tail),
+    and --resume finishes it. Only the solver is signalled here, so that it is the solver's
+    death the run reports."""
+    import re
+
+    case = ROOT / "cases" / "fixed_head_3Hz"
+    extra = ["--set", "time.periods=2", "--set", "output.checkpoint_every=2"]
+    extra += ["--set", "fluid.driver=persistent", "--set", "coupling.scheme=explicit-am"]
+    out = world_searchable / "stopped"
+    proc = subprocess.Popen(
+        fsi_run(case, out, *extra), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.time() + 600
+    while time.time() < deadline and proc.poll() is None:
+        if (out / "checkpoint.h5").exists():
+            with h5py.File(out / "results.h5", "r", locking=False) as h5:
+                if h5["time_s"].shape[0] >= 3:
+                    break
+        time.sleep(0.2)
+    # until the run ends: a pimpleFoam killed between windows is relaunched by the driver
+    # (from the window's time folder), one killed while it solves stops the run
+    while proc.poll() is None and time.time() < deadline:
+        subprocess.run(["pkill", "-TERM", "-f", f"pimpleFoam -case {out}"])
+        time.sleep(0.05)
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 130, err[-3000:]
+    stopped = re.fullmatch(
+        r"interrupted: window (\d+) did not finish: pimpleFoam was stopped by SIGTERM \(a "
+        r"scheduler's time limit, scancel or Ctrl-C\) in \S+; the checkpoint after window "
+        r"(\d+) is kept: continue with --resume",
+        err.strip(),
+    )
+    assert stopped, err[-3000:]
+    assert int(stopped.group(2)) < int(stopped.group(1))
+    done = subprocess.run([*fsi_run(case, out, *extra), "--resume"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    with h5py.File(out / "results.h5") as h5:
+        assert h5["time_s"].shape[0] == 40  # two periods of 20 windows
+
+
 def test_plain_and_preconditioned_quasi_newton_converge_to_the_same_run(world_searchable):
     """The converged coupled run does not depend on the scheme. The lead-in's last force is
     the structure's load at t = 0 (initial data): left at zero, plain IQN-ILS (exchanging

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fsi_orchestrator.participant import ParticipantSetupError
+from fsi_orchestrator.participant import ParticipantSetupError, ParticipantStopped
 
 INSTALL_HINT = (
     "install the Debian package with `apt-get install -y openfoam` (v1912: binaries and "
@@ -21,6 +21,10 @@ class OpenFoamNotFoundError(OpenFoamError, ParticipantSetupError):
 
 class OpenFoamRunError(OpenFoamError):
     """An OpenFOAM program stopped with an error; the case folder is kept for inspection."""
+
+
+class OpenFoamStopped(ParticipantStopped):
+    """An OpenFOAM program was stopped by a signal from outside (a scheduler's time limit)."""
 
 
 class MeshQualityError(OpenFoamError):

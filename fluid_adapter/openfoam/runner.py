@@ -16,6 +16,7 @@ import math
 import os
 import re
 import shutil
+import signal
 import stat
 import subprocess
 import time
@@ -23,7 +24,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import INSTALL_HINT, DivergenceError, OpenFoamNotFoundError, OpenFoamRunError
+from .errors import (
+    INSTALL_HINT,
+    DivergenceError,
+    OpenFoamNotFoundError,
+    OpenFoamRunError,
+    OpenFoamStopped,
+)
 
 DEFAULT_PROJECT_DIR = Path("/usr/share/openfoam")
 NOBODY_UID = 65534  # Debian's nobody:nogroup
@@ -219,7 +226,19 @@ def launch(command: Command) -> subprocess.Popen:
     )
 
 
+# how a program stopped by SIGHUP, SIGINT or SIGTERM ends: killed by the signal (negative,
+# from Popen), or as mpirun reports a rank it saw killed (128 + the signal)
+STOP_SIGNALS = (signal.SIGHUP, signal.SIGINT, signal.SIGTERM)
+STOPPED_CODES = {-s for s in STOP_SIGNALS} | {128 + s for s in STOP_SIGNALS}
+
+
 def check_finished(command: Command, returncode: int) -> None:
+    if returncode in STOPPED_CODES:
+        number = abs(returncode) % 128
+        raise OpenFoamStopped(
+            f"{command.app} was stopped by {signal.Signals(number).name} (a scheduler's time "
+            f"limit, scancel or Ctrl-C) in {command.case}"
+        )
     whole = command.log.read_text(errors="replace") if command.log.is_file() else ""
     reason = divergence(whole)
     if reason is not None:
