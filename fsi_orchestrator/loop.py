@@ -44,6 +44,10 @@ class ResumeError(RuntimeError):
     """No usable checkpoint to resume from."""
 
 
+# what a run that cannot be resumed can do instead (its folder holds an earlier run's files)
+AFRESH = "start it afresh: without --resume, with --overwrite to replace the folder's files"
+
+
 @dataclass(frozen=True, kw_only=True)
 class Schedule:
     dt: float
@@ -252,7 +256,7 @@ def load_checkpoint(
     with windows of ``dt`` (None: any) for the case of ``identity`` (None: any); returns the
     number of windows it had done."""
     if not path.exists():
-        raise ResumeError(f"{path}: no checkpoint to resume from (run without --resume)")
+        raise ResumeError(f"{path}: no checkpoint to resume from; {AFRESH}")
     try:
         loop_state, states, attrs = read_checkpoint(path)
         int(loop_state["window"])
@@ -261,9 +265,9 @@ def load_checkpoint(
         # or a state's finiteness says it is not what was written
         why = str(err) if isinstance(err, CorruptFile) else "truncated or corrupt"
         raise ResumeError(
-            f"{path}: not a readable checkpoint ({why}); rerun without --resume or restore it"
+            f"{path}: not a readable checkpoint ({why}); restore it, or {AFRESH}"
         ) from None
-    changed = "run without --resume, or resume with the settings it was written with"
+    changed = f"resume with the settings it was written with, or {AFRESH}"
     stored = attrs.get(IDENTITY_ATTR)
     changes = identity_changes(stored, identity) if identity and stored else []
     if changes:
@@ -296,6 +300,11 @@ def load_checkpoint(
 
 def _check_results_reach(path: Path, windows: int) -> None:
     """The results a resumed run appends to must hold every window the checkpoint did."""
+    if not path.exists():
+        raise ResumeError(
+            f"{path}: missing, where the checkpoint holds {windows} windows: the run's results "
+            f"are gone, so it cannot go on from there; {AFRESH}"
+        )
     try:
         rows = stored_rows(path)
     except (OSError, KeyError, ValueError) as err:
@@ -303,7 +312,7 @@ def _check_results_reach(path: Path, windows: int) -> None:
     if rows < windows:
         raise ResumeError(
             f"{path}: holds {rows} windows, the checkpoint {windows}: the run's results are "
-            "incomplete, so it cannot go on from there; run without --resume"
+            f"incomplete, so it cannot go on from there; {AFRESH}"
         )
 
 

@@ -44,6 +44,49 @@ def test_override_is_validated_like_the_file_and_named_as_the_set(tmp_path):
     # a list's item is the --set's that gave the list
     msg = error_of(tmp_path, "", ["actuation.left_volts=[nan, 1500]"])
     assert msg.startswith("--set 'actuation.left_volts=[nan, 1500]': actuation.left_volts[0]")
+    # a check across keys names the --set it mentions
+    msg = error_of(tmp_path, "", ["time.end_time_s=0.01"])
+    assert msg.startswith("--set 'time.end_time_s=0.01': time.step_s and time.end_time_s go")
+
+
+def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
+    """The clamp's length defaults to the head weight's diameter: a larger head weight from
+    --set leaves no plate free, and the line names the --set, not the file alone."""
+    case = ROOT / "cases" / "fixed_head_3Hz"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            modal_cli.__name__,
+            str(case),
+            "--set",
+            "fluid.model=potential",
+            "--set",
+            "geometry.head_weight_radius_m=0.09",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "error: case.toml with --set 'fluid.model=potential', "
+        "'geometry.head_weight_radius_m=0.09': boundary.clamp_length_m (0.183 m) must be "
+        "shorter than the plate (0.167 m), or nothing is free to move"
+    )
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            modal_cli.__name__,
+            str(case),
+            "--set",
+            "geometry.max_height_m=0.01",
+        ],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 2
+    assert done.stderr.startswith("error: --set 'geometry.max_height_m=0.01': geometry.peduncle")
 
 
 @pytest.mark.parametrize(

@@ -160,6 +160,10 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
             "is 'ok'",
         ),
         (
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,-3,0.01,ok\n",
+            "sweep.csv, line 2: frequency_hz = '-3' is not > 0",
+        ),
+        (
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,nan,,failed: crashed\n",
             "sweep.csv, line 2: frequency_hz = 'nan' is not finite for a point whose status "
             "is 'failed: crashed'",
@@ -189,6 +193,19 @@ def test_a_missing_path_and_a_mesh_reference_to_a_run_are_refused_in_one_line(tm
     (tmp_path / "results.h5").write_text("")
     assert post.main([str(tmp_path), "--mesh-reference", str(tmp_path)]) == 2
     assert "--mesh-reference applies to a sweep's sweep.csv" in capsys.readouterr().err
+
+
+def test_a_run_without_windows_is_refused_in_one_line(tmp_path, capsys):
+    """A run stopped in its set-up leaves a results file with no rows: nothing to draw."""
+    import h5py
+
+    with h5py.File(tmp_path / "results.h5", "w") as h5:
+        h5.create_dataset("time_s", shape=(0, 1), maxshape=(None, 1))
+        h5.create_dataset("shell/tip_displacement_m", shape=(0, 3), maxshape=(None, 3))
+    assert post.main([str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {tmp_path / 'results.h5'}: no windows yet") and "\n" not in err
+    assert not (tmp_path / "run.png").exists()
 
 
 def test_a_vacuum_sweep_without_a_thrust_column_is_drawn(tmp_path, capsys):

@@ -17,6 +17,7 @@ import pytest
 
 from fishfsi.cli import run as run_cli
 from fsi_orchestrator.case import CaseError, load_case
+from fsi_orchestrator.loop import AFRESH
 from fsi_orchestrator.results import ResultsFile
 from solid_adapter.build import run_static
 
@@ -310,7 +311,6 @@ def test_an_output_folder_that_cannot_be_used_is_refused_before_the_set_up(tmp_p
     assert not (tmp_path / "new").exists()  # nothing was run or written, no folder left
     lines = capsys.readouterr().err.strip().splitlines()
     assert lines == [
-        f"error: --output {tmp_path / 'a_file'}: cannot write there (File exists)",
-        f"error: {tmp_path / 'new' / 'checkpoint.h5'}: no checkpoint to resume from "
-        "(run without --resume)",
+        f"error: --output {tmp_path / 'a_file'}: cannot write there (it is a file)",
+        f"error: {tmp_path / 'new' / 'checkpoint.h5'}: no checkpoint to resume from; {AFRESH}",
     ]

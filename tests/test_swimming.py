@@ -152,6 +152,7 @@ def test_the_seeds_right_turn_rate_within_a_factor_1_5(original_runs):
         ("swimming.head_weight_drag_coefficient=inf", "swimming.head_weight_drag_coefficient"),
         ("swimming.crossflow_drag_coefficient=-0.5", "swimming.crossflow_drag_coefficient"),
         ("boundary.head=clamped", "boundary.head"),
+        ("fluid.model=none", "fluid.model"),
     ],
 )
 def test_bad_input_is_one_line_naming_the_key(capsys, override, key):

@@ -61,8 +61,14 @@ def add_version(parser: argparse.ArgumentParser) -> None:
 def load(args: argparse.Namespace) -> Case:
     """The validated case of a command: an empty case.toml is refused, and so is a plate that
     does not fit its clamp or its fluid domain (one line, exit 2, before any solver runs)."""
+    from fsi_orchestrator.case.loader import blame_override
+
     case = load_case(args.case, args.overrides, allow_empty=False)
-    check_plausible(case)
+    try:
+        check_plausible(case)
+    except CaseError as err:  # a check across keys may follow from a --set
+        given = list(args.overrides or ())
+        raise CaseError(blame_override(str(err), given, derived=True)) from None
     return case
 
 
@@ -222,6 +228,13 @@ def run_main(
 ) -> int:
     args = parser.parse_args(argv)
     return guarded(lambda: body(args), interrupted)
+
+
+def cannot_write(output: Path, err: OSError, flag: str = "--output ") -> str:
+    """One line for an output folder that cannot be made or written (``flag``: how the user
+    named it; empty for a default folder)."""
+    why = "it is a file" if output.is_file() else err.strerror
+    return f"{flag}{output}: cannot write there ({why})"
 
 
 def output_folder(given: str | None, default: Path) -> Path:

@@ -14,7 +14,7 @@ import h5py
 import numpy as np
 
 from fsi_orchestrator.case import CaseError
-from fsi_orchestrator.loop import ResumeError
+from fsi_orchestrator.loop import AFRESH, ResumeError
 from fsi_orchestrator.results import (
     CHECKPOINT_FILE,
     MIN_FREE_BYTES,
@@ -23,6 +23,8 @@ from fsi_orchestrator.results import (
     read_checkpoint,
     write_failure,
 )
+
+from .common import cannot_write
 
 SWEEP_FILES = ("sweep.csv", "sweep_rows")  # what fsi-sweep keeps in its --output
 
@@ -34,11 +36,11 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
     checkpoint goes once the set-up is done (coupling.jacobian_from may still read it)."""
     checkpoint = output / CHECKPOINT_FILE
     if resume and not checkpoint.exists():  # before the folder is made: nothing left behind
-        raise ResumeError(f"{checkpoint}: no checkpoint to resume from (run without --resume)")
+        raise ResumeError(f"{checkpoint}: no checkpoint to resume from; {AFRESH}")
     try:
         output.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+        raise CaseError(cannot_write(output, err)) from None
     sweep = [n for n in SWEEP_FILES if (output / n).exists()]
     if sweep:  # a run's files among a sweep's points would be taken for a point's
         raise CaseError(

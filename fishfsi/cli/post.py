@@ -31,7 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from . import pictures  # noqa: E402
-from .common import EXIT_BAD_INPUT, EXIT_OK, add_version  # noqa: E402
+from .common import EXIT_BAD_INPUT, EXIT_OK, add_version, cannot_write  # noqa: E402
 from .swimming import plot_swimming_sweep  # noqa: E402
 
 
@@ -124,6 +124,8 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
                     f"{csv_path}, line {line}: {key} = {text!r} is not finite for a point "
                     f"whose status is {row.get('status', 'ok')!r}"
                 )
+            if key == "frequency_hz" and not value > 0:
+                raise PostError(f"{csv_path}, line {line}: frequency_hz = {text!r} is not > 0")
         for key in needed:
             if not row[key]:
                 raise PostError(
@@ -281,6 +283,11 @@ def plot_run(h5_path: Path, output: Path) -> Path:
         force = h5["fluid/force_n"][:] if "fluid/force_n" in h5 else None
         thrust = h5["fluid/thrust_n"][:, 0] if "fluid/thrust_n" in h5 else None
         solves = h5["coupling/fluid_solves"][:, 0] if "coupling/fluid_solves" in h5 else None
+    if len(t) == 0:
+        raise PostError(
+            f"{h5_path}: no windows yet (the run stopped in its set-up, or is in its first "
+            "window): nothing to draw"
+        )
     panels = 1 + (force is not None or thrust is not None) + (solves is not None)
     fig, axes = plt.subplots(panels, 1, figsize=(6.5, 2.4 * panels), sharex=True, squeeze=False)
     axes = axes[:, 0]
@@ -406,7 +413,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         with tempfile.TemporaryFile(dir=output):  # a read-only mount lets mkdir pass
             pass
     except OSError as err:
-        print(f"error: --output {output}: cannot write there ({err.strerror})", file=sys.stderr)
+        named = "--output " if args.output else "the output folder "
+        print(f"error: {cannot_write(output, err, named)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         if found.suffix == ".csv":

@@ -25,6 +25,7 @@ from .common import (
     EXIT_OK,
     atomic_write,
     base_parser,
+    cannot_write,
     emit,
     json_text,
     load,
@@ -543,7 +544,7 @@ def _body(args: argparse.Namespace) -> int:
         try:  # refused before the work, as a dynamic run's folder is
             output.mkdir(parents=True, exist_ok=True)
         except OSError as err:
-            raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+            raise CaseError(cannot_write(output, err)) from None
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
     if keep:

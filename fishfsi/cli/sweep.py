@@ -51,6 +51,7 @@ from .common import (
     EXIT_OK,
     atomic_write,
     base_parser,
+    cannot_write,
     emit,
     json_text,
     load,
@@ -481,9 +482,7 @@ class SweepTable:
         try:
             self.rows_dir.mkdir(parents=True, exist_ok=True)
         except OSError as err:
-            raise CaseError(
-                f"--output {self.output}: cannot write there ({err.strerror})"
-            ) from None
+            raise CaseError(cannot_write(self.output, err)) from None
         done: set[str] = set()
         if resume:
             if case_file.is_file():

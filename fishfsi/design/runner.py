@@ -70,7 +70,8 @@ def prepare_output(
     try:
         evaluations.mkdir(parents=True, exist_ok=True)
     except OSError as err:
-        raise CaseError(f"--output {output}: cannot write there ({err.strerror})") from None
+        why = "it is a file" if output.is_file() else err.strerror
+        raise CaseError(f"--output {output}: cannot write there ({why})") from None
     identity_file = output / IDENTITY_FILE
     done: dict[str, dict] = {}
     refuse_earlier_study(output, identity, resume, overwrite)

@@ -103,10 +103,10 @@ def load_case(
     try:
         return case_from_dict(merged, directory)
     except CaseError as err:
-        raise CaseError(_blame_override(str(err), overrides)) from None
+        raise CaseError(blame_override(str(err), overrides)) from None
 
 
-def _blame_override(message: str, overrides: list[str]) -> str:
+def blame_override(message: str, overrides: list[str], *, derived: bool = False) -> str:
     """A message about a key that --set gave names the --set, not the file: "case.toml:
     actuation.frequency_hz must be > 0, ..." -> "--set 'actuation.frequency_hz=-3':
     actuation.frequency_hz must be > 0, ..."."""
@@ -117,7 +117,21 @@ def _blame_override(message: str, overrides: list[str]) -> str:
     key = body.split(maxsplit=1)[0].rstrip(":") if body.strip() else ""
     key = key.split("[", 1)[0]  # a list's item: actuation.left_volts[0]
     given = [o for o in overrides if o.split("=", 1)[0].strip() == key]
-    return f"--set {given[-1]!r}: {body}" if given else message
+    if given:
+        return f"--set {given[-1]!r}: {body}"
+    # a check across keys ("peduncle_height_m must be <= max_height_m") names the --set key
+    # it mentions; a ``derived`` one (a check of the resolved plate) that mentions none may
+    # still follow from a --set (a default derived from it): it names the file with every --set
+    mentioned = [
+        o
+        for o in overrides
+        if re.search(rf"(?<![\w.]){re.escape(o.split('=', 1)[0].strip())}(?!\w)", body)
+    ]
+    if mentioned:
+        return f"--set {mentioned[-1]!r}: {body}"
+    if overrides and derived:
+        return f"{CASE_FILE} with --set {', '.join(repr(o) for o in overrides)}: {body}"
+    return message
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
@@ -226,6 +240,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
                 'held nowhere) or "elastic" (its head on springs, a sensitivity study of what '
                 'might restrain it), got "clamped"'
+            )
+        if case.fluid.model.value == "none":
+            raise CaseError(
+                'analysis.kind = "swimming" needs a liquid to swim in: fluid.model = '
+                '"potential" or "slender_body" (or "openfoam" for a flume), got "none"'
             )
         speed = case.swimming.speed_m_s
         if case.fluid.model.value == "openfoam" and (speed is None or speed <= 0):
