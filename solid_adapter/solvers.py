@@ -280,14 +280,21 @@ class _NewtonIteration:
         return False
 
     def _not_converged(self) -> SolverError:
-        return SolverError(
-            f"shell: Newton did not converge {self.where} in {self.settings.max_iterations} "
-            f"iterations (last scaled increment {min(self.size, self.previous):.2e}); "
-            + (
-                "reduce the load step (more analysis.load_steps)"
-                if self.where.startswith("in load step")
-                else "reduce the time step (more time.steps_per_period, or a smaller time.step_s)"
+        limit = self.settings.max_iterations
+        cure = (
+            "reduce the load step (more analysis.load_steps)"
+            if self.where.startswith("in load step")
+            else "reduce the time step (more time.steps_per_period, or a smaller time.step_s)"
+        )
+        if limit < NewtonSettings.max_iterations:  # the limit was lowered below the default
+            cure = (
+                f"allow more iterations (analysis.max_newton_iterations, default "
+                f"{NewtonSettings.max_iterations}) or {cure}"
             )
+        return SolverError(
+            f"shell: Newton did not converge {self.where} in {limit} "
+            f"iteration{'s' if limit != 1 else ''} (last scaled increment "
+            f"{min(self.size, self.previous):.2e}); {cure}"
         )
 
 

@@ -208,6 +208,8 @@ def test_newton_names_the_key_of_the_analysis(tmp_path, capsys, case, settings, 
     line = proc.stderr.strip().splitlines()[-1]
     assert proc.returncode == 1, proc.stderr
     assert "Newton did not converge" in line and key in line and other not in line, line
+    # the lowered limit is named as a cure too
+    assert "allow more iterations (analysis.max_newton_iterations, default 30)" in line, line
 
 
 def test_console_scripts_exit_2_with_one_line(tmp_path):

@@ -226,6 +226,13 @@ def test_frequency_lists(text, expected):
     assert sweep_cli.parse_frequencies(text) == pytest.approx(expected)
 
 
+def test_a_fractional_step_gives_the_frequencies_as_written():
+    """np.arange's float noise (1.2000000000000002) would go into the point names, the CSV
+    and the JSON."""
+    got = sweep_cli.parse_frequencies("1:2:0.1")
+    assert [repr(f) for f in got] == [repr(round(1 + 0.1 * k, 1)) for k in range(11)]
+
+
 @pytest.mark.parametrize("text", ["0,3", "3,-1", "1:5:0", "1:5:-1", "nan", "3;5"])
 def test_a_bad_frequency_list_is_refused_in_one_line(text):
     with pytest.raises(CaseError, match=r"--frequencies .*: use start:stop:step or a,b,c"):

@@ -106,6 +106,8 @@ def parse_frequencies(text: str) -> list[float]:
             f"--frequencies {text!r}: more than {MAX_POINTS} points in one sweep (check the step)"
         )
     frequencies = [float(f) for f in frequencies]  # not numpy's: they go into TOML and JSON
+    if ":" in text:  # 12 digits drop arange's float noise (1:2:0.1 gives 1.2000000000000002)
+        frequencies = [float(f"{f:.12g}") for f in frequencies]
     if not frequencies or not all(np.isfinite(f) and f > 0 for f in frequencies):
         raise CaseError(usage)
     seen: dict[str, float] = {}
@@ -748,15 +750,19 @@ def _sweep(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = base_parser("fsi-sweep", "Tail amplitude and thrust versus driving frequency.")
-    parser.add_argument("--frequencies", default="1:25:2", help="start:stop:step or a,b,c Hz")
-    parser.add_argument("--waveforms", default="sine,square", help="sine, square or both")
+    parser.add_argument(
+        "--frequencies", default="1:25:2", help="start:stop:step or a,b,c Hz (default: 1:25:2)"
+    )
+    parser.add_argument(
+        "--waveforms", default="sine,square", help="sine, square or both (default: both)"
+    )
     parser.add_argument(
         "--method",
         choices=("linear", "transient"),
         default="linear",
         help="linear: modal superposition about the mean-voltage equilibrium, no CFD (an "
         "OpenFOAM case uses the potential model in its tank; seconds); transient: a run per "
-        "frequency with the case's own fluid (MPI: one frequency per rank)",
+        "frequency with the case's own fluid (MPI: one frequency per rank); default: linear",
     )
     parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
     parser.add_argument(
