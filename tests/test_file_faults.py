@@ -327,8 +327,11 @@ def test_a_rerun_into_a_folder_holding_results_is_refused_unless_overwrite(done,
     assert code == 2
     one_line_naming(lines, out, "--resume", "--output", "--overwrite")
     assert (out / "results.h5").read_bytes() == before
+    stale = out / "vtk" / "shell_999999.vtu"  # a window of a longer earlier run
+    stale.write_text("")
     code, lines = run(capsys, case, "--overwrite")
     assert code == 0, lines
+    assert not stale.exists()
 
 
 def test_a_nan_result_never_exits_zero(done, capsys, monkeypatch):

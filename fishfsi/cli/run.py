@@ -4,6 +4,7 @@ summary (``--json`` for machines)."""
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 import time
 from collections.abc import Sequence
@@ -266,6 +267,9 @@ def run_dynamic(
     )
     if replaces_run:  # --overwrite: a later --resume must not find the old checkpoint
         (output / CHECKPOINT_FILE).unlink(missing_ok=True)
+        # nor the pictures find the old run's later windows (its .pvd is rewritten, its .vtu
+        # files past this run's end would stay)
+        shutil.rmtree(output / "vtk", ignore_errors=True)
     start = time.perf_counter()
     if coupling is not None and coupling.settings.lead_in_windows > 0 and not resume:
         progress.release()
