@@ -129,12 +129,19 @@ class WindowLoop:
                 self.stopped = self.stop(results)
             while self.window < self.schedule.n_windows and self.stopped is None:
                 start = wallclock.perf_counter()
+                running = self.window + 1
                 try:
                     stats = self._solve_window()
+                    self.window += 1
+                    row = self._record(results, vtk, wallclock.perf_counter() - start, stats)
                 except ParticipantStopped as err:  # the job's time limit reached the solver
-                    raise KeyboardInterrupt(self._stopped_in_window(err)) from None
-                self.window += 1
-                row = self._record(results, vtk, wallclock.perf_counter() - start, stats)
+                    raise KeyboardInterrupt(self._stopped_in_window(running, err)) from None
+                except Exception as err:
+                    # a solver the same SIGTERM stopped may only say that it failed (mpirun
+                    # exits 1 when it is signalled itself): the run was asked to stop
+                    if not self.interrupted():
+                        raise
+                    raise KeyboardInterrupt(self._stopped_in_window(running, err)) from None
                 self.stopped = self.stop(results)
                 interrupted = self.interrupted()
                 if (
@@ -220,10 +227,11 @@ class WindowLoop:
         }
 
     # ----------------------------------------------------------------- checkpoints
-    def _stopped_in_window(self, err: ParticipantStopped) -> str:
-        where = f"window {self.window + 1} did not finish: {err}"
+    def _stopped_in_window(self, window: int, err: BaseException) -> str:
+        first = (str(err).splitlines() or [type(err).__name__])[0]
+        where = f"window {window} did not finish: {first}"
         if self._checkpointed is None:
-            return f"{where}; no checkpoint was written yet: run it again"
+            return f"{where}; no checkpoint was written yet: run it again with --overwrite"
         return (
             f"{where}; the checkpoint after window {self._checkpointed} is kept: "
             "continue with --resume"

@@ -49,6 +49,18 @@ def test_override_is_validated_like_the_file_and_named_as_the_set(tmp_path):
     assert msg.startswith("--set 'time.end_time_s=0.01': time.step_s and time.end_time_s go")
 
 
+def test_a_key_named_only_in_the_advice_is_not_blamed():
+    from fsi_orchestrator.case.loader import blame_override
+
+    message = (
+        'case.toml: fluid.inflow_m_s = 0.3: a flume\'s inflow needs fluid.model = "openfoam" '
+        "(the fast models take the speed from swimming.speed_m_s)"
+    )
+    assert blame_override(message, ["swimming.speed_m_s=0.3"]) == message
+    message = "case.toml: time.step_s must be > 0; see time.end_time_s"
+    assert blame_override(message, ["time.end_time_s=1"]) == message
+
+
 def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
     """The clamp's length defaults to the head weight's diameter: a larger head weight from
     --set leaves no plate free, and the line names the --set, not the file alone."""

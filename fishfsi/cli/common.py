@@ -215,7 +215,11 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
+        from fsi_orchestrator.participant import ParticipantStopped
+
         why = str(err) or interrupted
+        if isinstance(err, ParticipantStopped):  # a solver stopped outside the windows
+            why = f"{err}; {interrupted}"
         print(f"interrupted: {why}", file=sys.stderr)
         return EXIT_INTERRUPTED
 

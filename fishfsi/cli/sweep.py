@@ -161,7 +161,7 @@ def transient_sweep(
     holds a checkpoint continues from it (fsi-run --resume)."""
     from fluid_adapter.openfoam.errors import MeshFoldedError
     from fsi_orchestrator.convergence import CouplingDivergenceError
-    from fsi_orchestrator.loop import ResumeError
+    from fsi_orchestrator.loop import AFRESH, ResumeError
     from fsi_orchestrator.results import CHECKPOINT_FILE
     from solid_adapter.solvers import SolverError
 
@@ -174,7 +174,8 @@ def transient_sweep(
         except ResumeError as err:
             if not continued:
                 raise
-            print(f"note: {folder}: {err}; running the point afresh", file=sys.stderr)
+            why = str(err).split(f"; {AFRESH}")[0]  # the sweep starts it afresh itself
+            print(f"note: {folder}: {why}; running the point afresh", file=sys.stderr)
             return run_dynamic(point, folder, resume=False, show_progress=False)
 
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]

@@ -122,10 +122,13 @@ def blame_override(message: str, overrides: list[str], *, derived: bool = False)
     # a check across keys ("peduncle_height_m must be <= max_height_m") names the --set key
     # it mentions; a ``derived`` one (a check of the resolved plate) that mentions none may
     # still follow from a --set (a default derived from it): it names the file with every --set
+    # the claim, not the advice after it ("; use ...", "(the fast models take ...)"), which
+    # may name other keys
+    claim = re.split(r"[;(]", body, maxsplit=1)[0]
     mentioned = [
         o
         for o in overrides
-        if re.search(rf"(?<![\w.]){re.escape(o.split('=', 1)[0].strip())}(?!\w)", body)
+        if re.search(rf"(?<![\w.]){re.escape(o.split('=', 1)[0].strip())}(?!\w)", claim)
     ]
     if mentioned:
         return f"--set {mentioned[-1]!r}: {body}"

@@ -474,7 +474,8 @@ class Analysis:
         "(implicit time integration, Newton each step), modal (in "
         'vacuum, or wet with fluid.model = "potential") or swimming (self-propelled speed, '
         "swimming number and turning rate of the free fish from its linear periodic response; "
-        'boundary.head = "free", or "elastic" for a restrained head; keys in [swimming], '
+        'boundary.head = "free", or "elastic" for a restrained head, and a liquid, '
+        'fluid.model not "none"; keys in [swimming], '
         "docs/swimming.md).",
     )
     load_steps: int = param(10, "static: number of load increments.", ge=1, le=10_000)
