@@ -194,7 +194,11 @@ def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         run_cli.main([str(tmp_path), "--resume", "--overwrite"])
     assert exit_.value.code == 2
-    assert "--overwrite: not allowed with argument --resume" in capsys.readouterr().err
+    # one line, as all bad input (argparse's usage block is a --help away)
+    assert capsys.readouterr().err == (
+        "error: fsi-run: argument --overwrite: not allowed with argument --resume "
+        "(see fsi-run --help)\n"
+    )
 
 
 def test_console_script_prints_no_traceback(tmp_path):

@@ -41,7 +41,15 @@ from ..design.runner import (
     study_identity,
 )
 from ..design.study import Evaluation, Study, load_study
-from .common import EXIT_OK, add_version, emit, guarded, json_text, output_folder
+from .common import (
+    EXIT_OK,
+    OneLineParser,
+    add_version,
+    emit,
+    guarded,
+    json_text,
+    output_folder,
+)
 from .sweep import mpi_world
 
 
@@ -215,7 +223,7 @@ def _design(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="fsi-design",
         description="A design study: parameters, objectives and constraints over a base case.",
         epilog="study.toml keys, methods and outputs: docs/design.md.",

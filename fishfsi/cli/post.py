@@ -13,7 +13,6 @@ Writes PNG files next to the input (or to ``--output``) and prints their paths.
 
 from __future__ import annotations
 
-import argparse
 import copy
 import csv
 import json
@@ -31,7 +30,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from . import pictures  # noqa: E402
-from .common import EXIT_BAD_INPUT, EXIT_OK, add_version, cannot_write  # noqa: E402
+from .common import (  # noqa: E402
+    EXIT_BAD_INPUT,
+    EXIT_OK,
+    OneLineParser,
+    add_version,
+    cannot_write,
+)
 from .swimming import plot_swimming_sweep  # noqa: E402
 
 
@@ -374,7 +379,7 @@ def drive_period_s(results: Path) -> float | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="fsi-post",
         description="Figures from results: amplitude and thrust versus frequency from a sweep, "
         "histories (and flow slices) from a run.",
