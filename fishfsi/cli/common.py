@@ -20,6 +20,13 @@ from fsi_orchestrator.case import Case, CaseError, load_case
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
+def plural(count: int, noun: str) -> str:
+    """'1 waveform', '2 waveforms', '2 frequencies'."""
+    if count == 1:
+        return f"1 {noun}"
+    return f"{count} {noun[:-1] + 'ies' if noun.endswith('cy') else noun + 's'}"
+
+
 class OneLineParser(argparse.ArgumentParser):
     """A bad command line is reported as all bad input is: one line, exit 2 (argparse's usage
     block is a --help away)."""

@@ -49,6 +49,7 @@ from .common import (
     guarded,
     json_text,
     output_folder,
+    plural,
 )
 from .sweep import mpi_world
 
@@ -192,8 +193,8 @@ def _design(args: argparse.Namespace) -> int:
     )
     size = comm.Get_size() if comm is not None else args.workers
     say(
-        f"design: {study.method.kind.value}, {len(study.parameters)} parameters, into {output}"
-        f" ({size} {'MPI ranks' if comm is not None else 'workers'}"
+        f"design: {study.method.kind.value}, {plural(len(study.parameters), 'parameter')}, "
+        f"into {output} ({plural(size, 'MPI rank' if comm is not None else 'worker')}"
         f"{f', {len(done)} finished before (--resume)' if args.resume else ''})"
     )
     try:

@@ -57,6 +57,7 @@ from .common import (
     load,
     output_folder,
     plain,
+    plural,
     run_main,
 )
 from .compose import without_cfd
@@ -137,7 +138,8 @@ def select_point(
     if not 0 <= index < len(points):
         raise CaseError(
             f"--point {index}: this sweep has points 0..{len(points) - 1} "
-            f"({len(waveforms)} waveforms x {len(frequencies)} frequencies); match --array to it"
+            f"({plural(len(waveforms), 'waveform')} x {plural(len(frequencies), 'frequency')}); "
+            "a SLURM job array's --array must match them"
         )
     waveform, frequency = points[index]
     return [frequency], [waveform]
