@@ -339,13 +339,16 @@ class Actuation:
     frequency_hz: float = param(3.0, "Driving frequency.", unit="Hz", gt=0, ge=0.01, le=1000)
     waveform: Waveform = param(Waveform.SINE, "Voltage waveform of both actuators.")
     left_volts: tuple[float, ...] = param(
-        (-500.0, 1500.0), "[min, max] voltage of the left (+z face) MFC.", unit="V", length=2
+        (-500.0, 1500.0),
+        "[min, max] voltage of the left (+z face) MFC, within the MFC's -500..1500 V (Table 3.1).",
+        unit="V",
+        length=2,
     )
     right_volts: tuple[float, ...] = param(
         (-500.0, 1500.0),
         "[min, max] voltage of the right "
         "(-z face) MFC, driven in anti-phase (opposite "
-        "sense) to the left one.",
+        "sense) to the left one; within -500..1500 V.",
         unit="V",
         length=2,
     )
@@ -523,13 +526,18 @@ class Time:
     )
     step_s: float | None = param(
         None,
-        "dynamic without actuation: time step (overrides steps_per_period).",
+        "dynamic: time step, with time.end_time_s (overrides steps_per_period; a run "
+        "without actuation has no period and needs both).",
         unit="s",
         ge=1e-9,
         le=10,
     )
     end_time_s: float | None = param(
-        None, "dynamic without actuation: end time (overrides periods).", unit="s", gt=0, le=1e4
+        None,
+        "dynamic: end time, with time.step_s (overrides periods).",
+        unit="s",
+        gt=0,
+        le=1e4,
     )
     periodic_tolerance: float | None = param(
         None,
