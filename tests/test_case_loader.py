@@ -64,39 +64,20 @@ def test_a_key_named_only_in_the_advice_is_not_blamed():
 def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
     """The clamp's length defaults to the head weight's diameter: a larger head weight from
     --set leaves no plate free, and the line names the --set, not the file alone."""
-    case = ROOT / "cases" / "fixed_head_3Hz"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            modal_cli.__name__,
-            str(case),
-            "--set",
-            "fluid.model=potential",
-            "--set",
-            "geometry.head_weight_radius_m=0.09",
-        ],
-        capture_output=True,
-        text=True,
-    )
+
+    def modal(*settings: str) -> subprocess.CompletedProcess:
+        sets = [a for s in settings for a in ("--set", s)]
+        cmd = [sys.executable, "-m", modal_cli.__name__, str(ROOT / "cases" / "fixed_head_3Hz")]
+        return subprocess.run([*cmd, *sets], capture_output=True, text=True)
+
+    done = modal("fluid.model=potential", "geometry.head_weight_radius_m=0.09")
     assert done.returncode == 2
     assert done.stderr.strip() == (
         "error: case.toml with --set 'fluid.model=potential', "
         "'geometry.head_weight_radius_m=0.09': boundary.clamp_length_m (0.183 m) must be "
         "shorter than the plate (0.167 m), or nothing is free to move"
     )
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            modal_cli.__name__,
-            str(case),
-            "--set",
-            "geometry.max_height_m=0.01",
-        ],
-        capture_output=True,
-        text=True,
-    )
+    done = modal("geometry.max_height_m=0.01")
     assert done.returncode == 2
     assert done.stderr.startswith("error: --set 'geometry.max_height_m=0.01': geometry.peduncle")
 

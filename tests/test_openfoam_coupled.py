@@ -201,6 +201,19 @@ def test_one_solve_per_window_is_stable_and_follows_the_implicit_run(world_searc
     assert np.abs(tip - tip_ref).max() < 0.15 * np.abs(tip_ref).max()
 
 
+def wait_for_a_checkpoint_and_rows(proc: subprocess.Popen, out: Path, rows: int) -> float:
+    """Until the run in ``out`` has a checkpoint and ``rows`` windows (or ends); returns the
+    deadline it kept to."""
+    deadline = time.time() + 600
+    while time.time() < deadline and proc.poll() is None:
+        if (out / "checkpoint.h5").exists():
+            with h5py.File(out / "results.h5", "r", locking=False) as h5:
+                if h5["time_s"].shape[0] >= rows:
+                    break
+        time.sleep(0.2)
+    return deadline
+
+
 @pytest.mark.parametrize("driver", ["relaunch", "persistent"])
 def test_killed_coupled_run_resumes_to_the_same_result(world_searchable, driver):
     """kill -9 after a checkpoint, --resume: the fluid restarts from its checkpoint time
@@ -217,13 +230,7 @@ def test_killed_coupled_run_resumes_to_the_same_result(world_searchable, driver)
     proc = subprocess.Popen(
         fsi_run(case, killed, *extra), stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
     )
-    deadline = time.time() + 600
-    while time.time() < deadline and proc.poll() is None:
-        if (killed / "checkpoint.h5").exists():
-            with h5py.File(killed / "results.h5", "r", locking=False) as h5:
-                if h5["time_s"].shape[0] >= 3:
-                    break
-        time.sleep(0.2)
+    wait_for_a_checkpoint_and_rows(proc, killed, 3)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     left = "running"
@@ -265,13 +272,7 @@ def test_a_fluid_stopped_by_the_schedulers_sigterm_ends_the_run_as_an_interrupti
     proc = subprocess.Popen(
         fsi_run(case, out, *extra), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
-    deadline = time.time() + 600
-    while time.time() < deadline and proc.poll() is None:
-        if (out / "checkpoint.h5").exists():
-            with h5py.File(out / "results.h5", "r", locking=False) as h5:
-                if h5["time_s"].shape[0] >= 3:
-                    break
-        time.sleep(0.2)
+    deadline = wait_for_a_checkpoint_and_rows(proc, out, 3)
     # until the run ends: a pimpleFoam killed between windows is relaunched by the driver
     # (from the window's time folder), one killed while it solves stops the run
     while proc.poll() is None and time.time() < deadline:
