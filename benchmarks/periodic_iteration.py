@@ -1,0 +1,243 @@
+"""Coupling by whole periods: the periodic state without the coupled start-up's beat.
+
+The transient coupling integrates the structure from its start, so any start error rings the
+coupled wet first mode for several periods (docs/coupling.md, "How early the periodic state is
+known"). Here the unknown is the periodic motion itself, harmonic by harmonic. Each iteration
+moves the CFD through one period of the current motion X_j(t) (prescribed motion, one fluid
+solve per window, one pimpleFoam launch) and records the fluid's nodal forces F_j(t). The
+periodic residual of the structure on that motion, for harmonic k of the drive's angular
+frequency w,
+
+    R_k = c_k F_V + F_k - (K - (k w)^2 M_s) X_k,
+
+is solved with the fast model as the Jacobian (potential added mass M_a, the edge drag's
+damping D linearized about X_j):
+
+    (K - (k w)^2 (M_s + M_a) + i k w beta D) dX_k = R_k,      X_{j+1} = X_j + dX.
+
+beta = 1 + p/2 is the drag law's incremental damping (f ~ |v|^p v) over its equivalent linear
+one, averaged over a change in amplitude (1 + p) and in phase (1). At the fixed point R = 0:
+the coupled periodic state. The structure is linear about the mean-voltage equilibrium and
+holds the drive's harmonics up to --harmonics (the odd ones of a half-wave symmetric drive).
+The start is the fast model's periodic orbit with the edge drag, after a one-period ramped
+lead-in. With beta = 1 the step is the fast model's periodic response to the CFD's force
+beyond it (a fixed-point iteration); ``--relaxation`` scales the step.
+
+    .venv/bin/python benchmarks/periodic_iteration.py cases/fixed_head_3Hz \
+        --set fluid.mesh_level=coarse --iterations 6
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from fishfsi.cli.compose import build_coupled_run, openfoam_fluid_factory
+from fluid_adapter.drag import edge_drag
+from fsi_orchestrator.case.loader import load_case
+from fsi_orchestrator.case.timing import windows_per_period
+from solid_adapter.harmonic import (
+    ModalSweep,
+    PeriodicResponse,
+    harmonic_amplitudes,
+    harmonic_load,
+)
+from solid_adapter.piezo import DriveSignal
+from solid_adapter.shell import NDOF
+
+
+def smoothstep(s: float) -> float:
+    s = min(1.0, max(0.0, s))
+    return s * s * s * (10 - 15 * s + 6 * s * s)
+
+
+class PeriodicStructure:
+    """The shell's linear periodic problem about the mean-voltage equilibrium, in the wet modes
+    of the fast model (M_s + M_a) with a static correction."""
+
+    def __init__(self, case, model, x_static, added_mass_z, harmonics: int, modes: int):
+        self.model, self.x_static = model, x_static
+        model.set_added_mass(added_mass_z)  # the fast model's inertia M_s + M_a
+        self.drive = DriveSignal.from_case(case)
+        self.omega = 2 * np.pi * case.actuation.frequency_hz
+        self.K = model.internal(model.zero_state(), np.zeros(2))[1]
+        self.F_V = harmonic_load(model, self.drive)
+        self.c = dict(harmonic_amplitudes(self.drive, harmonics))
+        # equal voltage ranges: half-wave symmetric, x(t + T/2) = -x(t), odd harmonics only
+        symmetric = self.drive.left_volts == self.drive.right_volts
+        self.ks = list(range(1, harmonics + 1, 2 if symmetric else 1))
+        self.drag = edge_drag(
+            model,
+            case.fluid.density_kg_m3,
+            case.actuation.frequency_hz,
+            frequency_exponent=case.fluid.edge_drag_frequency_exponent,
+        )
+        self.beta = 1 + self.drag.exponent / 2
+        sweep = ModalSweep.build(model, self.F_V, modes, stiffness=self.K)
+        self.Phi, self.wj = sweep.shapes, sweep.omegas
+        self.free = model.free_dofs
+        self._K = spla.factorized(sp.csc_matrix(self.K[self.free][:, self.free]))
+        self.tip = model.mesh.nearest_node(*model.layout.tip_point) * NDOF + 2
+
+    def solve(self, w: float, load: np.ndarray, damping: sp.spmatrix) -> np.ndarray:
+        """(K - w^2 M + i w C)^-1 load: modal, with the static correction K^-1 load."""
+        x = np.zeros(self.model.ndof, dtype=complex)
+        f = load[self.free]
+        x[self.free] = self._K(f.real) + 1j * self._K(f.imag)
+        Fm = self.Phi @ load
+        A = np.diag(self.wj**2 - w**2) + 1j * w * (self.Phi @ (damping @ self.Phi.T))
+        return x + (np.linalg.solve(A, Fm) - Fm / self.wj**2) @ self.Phi
+
+    def drive_load(self, k: int) -> np.ndarray:
+        return self.c.get(k, 0.0) * self.F_V
+
+    def damped_orbit(self, guess: PeriodicResponse) -> PeriodicResponse:
+        """The periodic response to the drive with the edge drag linearized about itself."""
+        response = guess
+        for _ in range(60):
+            D = self.drag.linear(self.model, response)
+            new = PeriodicResponse(
+                omega=self.omega,
+                x_static=self.x_static,
+                harmonics=[(k, self.solve(k * self.omega, self.drive_load(k), D)) for k in self.ks],
+            )
+            previous = abs(dict(response.harmonics).get(1, np.zeros(1))[self.tip])
+            response = relax(response, new, 0.5)
+            if abs(abs(dict(response.harmonics)[1][self.tip]) - previous) <= 1e-6 * previous:
+                break
+        return response
+
+    def update(
+        self, current: PeriodicResponse, fluid: dict, beta: float, relaxation: float
+    ) -> PeriodicResponse:
+        """The next motion from the fluid force's harmonics on the current one."""
+        D = self.drag.linear(self.model, current)
+        h = dict(current.harmonics)
+        out = []
+        for k in self.ks:
+            w = k * self.omega
+            X = h.get(k, np.zeros(self.model.ndof, dtype=complex))
+            # c F_V + F - (K - w^2 M_s) X, with M = M_s + M_a the model's inertia
+            R = self.drive_load(k) + fluid[k] - (self.K @ X - w**2 * (self.model.mass @ X))
+            out.append((k, X + relaxation * self.solve(w, R, beta * D)))
+        return PeriodicResponse(omega=self.omega, x_static=current.x_static, harmonics=out)
+
+
+def relax(old: PeriodicResponse, new: PeriodicResponse, w: float) -> PeriodicResponse:
+    old_h = dict(old.harmonics)
+    harmonics = [(k, old_h.get(k, 0) + w * (X - old_h.get(k, 0))) for k, X in new.harmonics]
+    return PeriodicResponse(omega=new.omega, x_static=new.x_static, harmonics=harmonics)
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("case", type=Path)
+    p.add_argument("--set", dest="overrides", action="append", default=[])
+    p.add_argument("--iterations", type=int, default=6)
+    p.add_argument("--harmonics", type=int, default=5, help="highest drive harmonic solved")
+    p.add_argument("--modes", type=int, default=30)
+    p.add_argument("--beta", type=float, help="the Jacobian's drag factor (default 1 + p/2)")
+    p.add_argument("--relaxation", type=float, default=1.0)
+    p.add_argument("--workdir", type=Path, default=Path("/tmp/periodic_iteration"))
+    p.add_argument("--json", type=Path, help="write the rows here")
+    args = p.parse_args()
+
+    wall0 = time.perf_counter()
+    case = load_case(args.case, [*args.overrides, f"time.periods={args.iterations + 2}"])
+    cfd = case.fluid.model.value == "openfoam"
+    factory = openfoam_fluid_factory(args.workdir, fresh=True) if cfd else None
+    run = build_coupled_run(case, factory)
+    solid, coupling = run.solid, run.coupling
+    fluid, mapping, model = coupling.fluid, coupling.mapping, solid.model
+    if coupling.added_mass_z is None or solid.orbit is None:
+        raise SystemExit("needs an *-am scheme and a periodic start (the case's defaults)")
+    n = windows_per_period(case)
+    period = 1.0 / case.actuation.frequency_hz
+    dt = period / n
+    structure = PeriodicStructure(
+        case, model, solid.orbit.x_static, coupling.added_mass_z, args.harmonics, args.modes
+    )
+    orbit = structure.damped_orbit(solid.orbit)
+    setup_s = time.perf_counter() - wall0
+
+    def motion_of(response):
+        return lambda t: response.at(t)[0].reshape(model.n_nodes, NDOF)[:, :3].copy()
+
+    def follow(motion, times):
+        start = time.perf_counter()
+        if cfd:  # one pimpleFoam launch for the period
+            forces = fluid.follow([mapping.consistent(motion(t)) for t in times], dt)
+        else:  # a fast fluid, window by window (a check: it converges to the fast orbit)
+            forces = [coupling.start_up._prescribed_window(motion, t, dt) for t in times]
+        return [mapping.conservative(f) for f in forces], time.perf_counter() - start
+
+    # lead-in: one period of the start orbit, ramped over its first half
+    start_orbit = motion_of(orbit)
+    times = [(k - n) * dt for k in range(1, n + 1)]
+
+    def ramped(t, first=times[0]):
+        return smoothstep((t - first + dt) / (period / 2)) * start_orbit(t)
+
+    _, lead_s = follow(ramped, times)
+    per_window = lead_s / n
+    print(f"set-up {setup_s:.1f} s, lead-in {lead_s:.1f} s ({per_window:.3f} s per window)")
+    current, previous = orbit, ramped
+    rows = []
+    for j in range(args.iterations):
+        t0 = j * period
+        times = [t0 + m * dt for m in range(1, n + 1)]
+        new = motion_of(current)
+
+        def followed(t, old=previous, new=new, t0=t0):  # blended over the first half period
+            r = smoothstep((t - t0) / (period / 2))
+            return (1 - r) * old(t) + r * new(t)
+
+        forces, fluid_s = follow(followed, times)
+        # the force on the followed motion, F = F_CFD + M_a (a_followed - a_current): the
+        # blend's extra acceleration carried by the fast inertia
+        h = 1e-4 * dt
+        loads = np.zeros((n, model.ndof))
+        for m, (t, f) in enumerate(zip(times, forces, strict=True)):
+            extra = (followed(t + h) - 2 * followed(t) + followed(t - h)) / h**2 - (
+                new(t + h) - 2 * new(t) + new(t - h)
+            ) / h**2
+            loads[m, 0::NDOF], loads[m, 1::NDOF] = f[:, 0], f[:, 1]
+            loads[m, 2::NDOF] = f[:, 2] + coupling.added_mass_z @ extra[:, 2]
+        # loads(t_m) = sum_k Im(F_k e^{i k w t_m}): F_k = i (2/n) sum_m loads_m e^{-i k w t_m}
+        fluid_h = {
+            k: 1j * (2.0 / n) * (np.exp(-1j * k * structure.omega * np.array(times)) @ loads)
+            for k in structure.ks
+        }
+        beta = structure.beta if args.beta is None else args.beta
+        updated = structure.update(current, fluid_h, beta, args.relaxation)
+        tip_now = np.array([followed(t)[structure.tip // NDOF, 2] for t in times])
+        tip_next = updated.dof_history(np.array([structure.tip]), np.array(times))[:, 0]
+        tip_old = current.dof_history(np.array([structure.tip]), np.array(times))[:, 0]
+        wall = time.perf_counter() - wall0
+        row = {
+            "iteration": j + 1,
+            "tail_amplitude_mm": 1e3 * float(np.ptp(tip_now) / 2),
+            "mean_thrust_mn": -1e3 * float(np.mean([f[:, 0].sum() for f in forces])),
+            "next_tail_amplitude_mm": 1e3 * float(np.ptp(tip_next) / 2),
+            "tail_update": float(np.max(np.abs(tip_next - tip_old)) / (np.ptp(tip_next) / 2)),
+            "fluid_s": fluid_s,
+            "wall_s": wall,
+            "prescribed_periods": wall / (n * per_window),
+        }
+        rows.append(row)
+        print(json.dumps(row))
+        previous, current = followed, updated
+    if args.json:
+        summary = {"setup_s": setup_s, "lead_in_s": lead_s, "beta": beta, "rows": rows}
+        args.json.write_text(json.dumps(summary, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
