@@ -42,19 +42,16 @@ from fishfsi.cli.compose import build_coupled_run, openfoam_fluid_factory
 from fluid_adapter.drag import edge_drag
 from fsi_orchestrator.case.loader import load_case
 from fsi_orchestrator.case.timing import windows_per_period
+from fsi_orchestrator.lead_in import smoothstep
 from solid_adapter.harmonic import (
     ModalSweep,
     PeriodicResponse,
     harmonic_amplitudes,
     harmonic_load,
+    linearized_damping_response,
 )
 from solid_adapter.piezo import DriveSignal
 from solid_adapter.shell import NDOF
-
-
-def smoothstep(s: float) -> float:
-    s = min(1.0, max(0.0, s))
-    return s * s * s * (10 - 15 * s + 6 * s * s)
 
 
 class PeriodicStructure:
@@ -99,19 +96,17 @@ class PeriodicStructure:
 
     def damped_orbit(self, guess: PeriodicResponse) -> PeriodicResponse:
         """The periodic response to the drive with the edge drag linearized about itself."""
-        response = guess
-        for _ in range(60):
-            D = self.drag.linear(self.model, response)
-            new = PeriodicResponse(
-                omega=self.omega,
-                x_static=self.x_static,
-                harmonics=[(k, self.solve(k * self.omega, self.drive_load(k), D)) for k in self.ks],
-            )
-            previous = abs(dict(response.harmonics).get(1, np.zeros(1))[self.tip])
-            response = relax(response, new, 0.5)
-            if abs(abs(dict(response.harmonics)[1][self.tip]) - previous) <= 1e-6 * previous:
-                break
-        return response
+
+        def solve(D):
+            harmonics = [(k, self.solve(k * self.omega, self.drive_load(k), D)) for k in self.ks]
+            return PeriodicResponse(omega=self.omega, x_static=self.x_static, harmonics=harmonics)
+
+        return linearized_damping_response(
+            solve,
+            lambda r: self.drag.linear(self.model, r),
+            self.drag.linear(self.model, guess),
+            self.tip,
+        )
 
     def update(
         self, current: PeriodicResponse, fluid: dict, beta: float, relaxation: float
@@ -127,12 +122,6 @@ class PeriodicStructure:
             R = self.drive_load(k) + fluid[k] - (self.K @ X - w**2 * (self.model.mass @ X))
             out.append((k, X + relaxation * self.solve(w, R, beta * D)))
         return PeriodicResponse(omega=self.omega, x_static=current.x_static, harmonics=out)
-
-
-def relax(old: PeriodicResponse, new: PeriodicResponse, w: float) -> PeriodicResponse:
-    old_h = dict(old.harmonics)
-    harmonics = [(k, old_h.get(k, 0) + w * (X - old_h.get(k, 0))) for k, X in new.harmonics]
-    return PeriodicResponse(omega=new.omega, x_static=new.x_static, harmonics=harmonics)
 
 
 def main() -> int:

@@ -112,7 +112,7 @@ class LeadIn:
         half = n * dt / 2
 
         def ramped(t: float) -> NDArray[np.float64]:
-            return _smoothstep((t - times[0] + dt) / half) * old(t)
+            return smoothstep((t - times[0] + dt) / half) * old(t)
 
         if self.start_orbit is None:
             self.follow(ramped, times, dt)
@@ -121,7 +121,7 @@ class LeadIn:
         new = periodic_motion(solid, self.omega)
 
         def blended(t: float) -> NDArray[np.float64]:
-            r = _smoothstep((t - times[0] + dt) / (n * dt))
+            r = smoothstep((t - times[0] + dt) / (n * dt))
             return (1 - r) * cap * old(t) + r * new(t)
 
         self.follow(blended, times, dt)
@@ -202,7 +202,7 @@ def peak_speed(motion: Motion, times: list[float]) -> float:
     )
 
 
-def _smoothstep(s: float) -> float:
+def smoothstep(s: float) -> float:
     """C2 ramp from 0 (s <= 0) to 1 (s >= 1)."""
     s = min(1.0, max(0.0, s))
     return s * s * s * (10 - 15 * s + 6 * s * s)
