@@ -18,7 +18,9 @@ damping D linearized about X_j):
 beta = 1 + p/2 is the drag law's incremental damping (f ~ |v|^p v) over its equivalent linear
 one, averaged over a change in amplitude (1 + p) and in phase (1). At the fixed point R = 0:
 the coupled periodic state. The structure is linear about the mean-voltage equilibrium and
-holds the drive's harmonics up to --harmonics (the odd ones of a half-wave symmetric drive).
+holds the drive's harmonics up to --harmonics (the odd ones of a half-wave symmetric drive);
+its tangent and piezo load are those at the equilibrium under the mean voltages (their
+prestress moves the fixed point by 3 % on the main job's scene).
 The start is the fast model's periodic orbit with the edge drag, after a one-period ramped
 lead-in. With beta = 1 the step is the fast model's periodic response to the CFD's force
 beyond it (a fixed-point iteration); ``--relaxation`` scales the step.
@@ -49,6 +51,7 @@ from solid_adapter.harmonic import (
     harmonic_amplitudes,
     harmonic_load,
     linearized_damping_response,
+    mean_voltage_tangent,
 )
 from solid_adapter.piezo import DriveSignal
 from solid_adapter.shell import NDOF
@@ -63,8 +66,9 @@ class PeriodicStructure:
         model.set_added_mass(added_mass_z)  # the fast model's inertia M_s + M_a
         self.drive = DriveSignal.from_case(case)
         self.omega = 2 * np.pi * case.actuation.frequency_hz
-        self.K = model.internal(model.zero_state(), np.zeros(2))[1]
-        self.F_V = harmonic_load(model, self.drive)
+        # the tangent and the piezo load at the mean-voltage equilibrium: its prestress
+        self.K = mean_voltage_tangent(model, x_static, self.drive)
+        self.F_V = harmonic_load(model, self.drive, x_static)
         self.c = dict(harmonic_amplitudes(self.drive, harmonics))
         # equal voltage ranges: half-wave symmetric, x(t + T/2) = -x(t), odd harmonics only
         symmetric = self.drive.left_volts == self.drive.right_volts
@@ -135,6 +139,12 @@ def main() -> int:
     p.add_argument("--relaxation", type=float, default=1.0)
     p.add_argument("--workdir", type=Path, default=Path("/tmp/periodic_iteration"))
     p.add_argument("--json", type=Path, help="write the rows here")
+    p.add_argument(
+        "--stand-in-drag",
+        action="store_true",
+        help="fast fluid only: add the edge drag on the followed motion (a check)",
+    )
+    p.add_argument("--blend", type=float, default=0.5, help="periods over which X_j -> X_j+1")
     args = p.parse_args()
 
     wall0 = time.perf_counter()
@@ -164,6 +174,14 @@ def main() -> int:
             forces = fluid.follow([mapping.consistent(motion(t)) for t in times], dt)
         else:  # a fast fluid, window by window (a check: it converges to the fast orbit)
             forces = [coupling.start_up._prescribed_window(motion, t, dt) for t in times]
+            if args.stand_in_drag:  # the fast fluid's edge drag on the followed motion
+                hh = 1e-4 * dt
+                for m, t in enumerate(times):
+                    v = np.zeros(model.ndof)
+                    v[2::NDOF] = (motion(t + hh)[:, 2] - motion(t - hh)[:, 2]) / (2 * hh)
+                    fd = structure.drag.force(model, None, v)[0][2::NDOF]
+                    forces[m] = forces[m].copy()
+                    forces[m][:, 2] -= fd
         return [mapping.conservative(f) for f in forces], time.perf_counter() - start
 
     # lead-in: one period of the start orbit, ramped over its first half
@@ -183,8 +201,8 @@ def main() -> int:
         times = [t0 + m * dt for m in range(1, n + 1)]
         new = motion_of(current)
 
-        def followed(t, old=previous, new=new, t0=t0):  # blended over the first half period
-            r = smoothstep((t - t0) / (period / 2))
+        def followed(t, old=previous, new=new, t0=t0):  # blended over --blend periods
+            r = smoothstep((t - t0) / (period * args.blend)) if args.blend > 0 else 1.0
             return (1 - r) * old(t) + r * new(t)
 
         forces, fluid_s = follow(followed, times)
