@@ -84,12 +84,13 @@ class WindowLoop:
         progress: ProgressFn | None = None,
         coupling: Coupling | None = None,
         stop: StopRule | None = None,
-        interrupted: Callable[[], bool] | None = None,
+        interrupted: Callable[[], str | None] | None = None,
     ) -> None:
         self.solid, self.schedule, self.output = solid, schedule, output
         self.progress = progress or (lambda done, total, row: None)
-        # asked to stop (SIGTERM): end after the running window, with a checkpoint
-        self.interrupted = interrupted or (lambda: False)
+        # asked to stop (the name of the signal that asked, e.g. SIGTERM): end after the
+        # running window, with a checkpoint
+        self.interrupted = interrupted or (lambda: None)
         self.coupling = coupling
         self.stop = stop or (lambda results: None)
         self.stopped: str | None = None  # why the run ended before its last window
@@ -154,8 +155,8 @@ class WindowLoop:
                 self.progress(self.window, self.schedule.n_windows, row)
                 if interrupted:
                     raise KeyboardInterrupt(
-                        f"stopped after window {self.window} (SIGTERM) with a checkpoint there; "
-                        "continue with --resume"
+                        f"stopped after window {self.window} ({interrupted}) with a checkpoint "
+                        "there; continue with --resume"
                     )
         except OSError as err:  # a VTU, PVD or flow file that could not be written
             if not is_write_fault(err):

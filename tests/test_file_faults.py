@@ -489,3 +489,19 @@ def test_every_command_has_version(main, capsys):
         main(["--version"])
     assert stop.value.code == 0
     assert fsi_orchestrator.__version__ in capsys.readouterr().out
+
+
+def test_a_reader_that_leaves_early_ends_the_command_without_a_traceback():
+    """`fsi-modal --json | head -c 10`: the closed pipe is exit 141 (128 + SIGPIPE), as a
+    shell's own tools end, and stderr stays empty."""
+    modal = subprocess.Popen(
+        [sys.executable, "-m", "fishfsi.cli.modal", str(ROOT / "cases/fish_modal_free")]
+        + ["--quiet", "--json"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert modal.stdout is not None
+    modal.stdout.close()  # nothing reads: the first write breaks the pipe
+    _, err = modal.communicate(timeout=300)
+    assert modal.returncode == 141
+    assert err.decode() == ""

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import h5py
 import numpy as np
+import pytest
 
 from fishfsi.cli.progress import RunProgress, duration, window_line
 from fsi_orchestrator.results import read_checkpoint
@@ -103,8 +104,10 @@ def wait_for_rows(results: Path, rows: int, process: subprocess.Popen, limit_s: 
     raise AssertionError(f"{results}: fewer than {rows} rows in {limit_s} s")
 
 
-def test_sigterm_ends_after_the_running_window_with_a_checkpoint_and_resume_goes_on(tmp_path):
-    """checkpoint_every = 1000: without the SIGTERM checkpoint a resume would start at 0."""
+@pytest.mark.parametrize("stop", [signal.SIGTERM, signal.SIGINT], ids=["sigterm", "ctrl-c"])
+def test_sigterm_ends_after_the_running_window_with_a_checkpoint_and_resume_goes_on(tmp_path, stop):
+    """checkpoint_every = 1000: without the signal's checkpoint a resume would start at 0.
+    SIGTERM (SLURM's time limit) and a first Ctrl-C (SIGINT) both end the running window."""
     settings = [*VACUUM, "--set", "time.periods=1", "--set", "output.checkpoint_every=1000"]
     settings += ["--set", "output.vtk=false", "--quiet"]
     killed = tmp_path / "killed"
@@ -115,11 +118,11 @@ def test_sigterm_ends_after_the_running_window_with_a_checkpoint_and_resume_goes
         text=True,
     )
     wait_for_rows(killed / "results.h5", 5, run)
-    run.send_signal(signal.SIGTERM)
+    run.send_signal(stop)
     _, err = run.communicate(timeout=120)
     assert run.returncode == 130, err
     stopped = re.fullmatch(
-        r"interrupted: stopped after window (\d+) \(SIGTERM\) with a checkpoint there; "
+        rf"interrupted: stopped after window (\d+) \({stop.name}\) with a checkpoint there; "
         r"continue with --resume",
         err.strip(),
     )

@@ -314,3 +314,21 @@ def test_an_output_folder_that_cannot_be_used_is_refused_before_the_set_up(tmp_p
         f"error: --output {tmp_path / 'a_file'}: cannot write there (it is a file)",
         f"error: {tmp_path / 'new' / 'checkpoint.h5'}: no checkpoint to resume from; {AFRESH}",
     ]
+
+
+def test_a_newton_failure_on_the_periodic_orbit_names_a_start_from_rest(tmp_path, capsys):
+    """The beam in the liquid at 10 Hz, near its wet resonance: the linear orbit swings 79 mm
+    on an 87 mm beam and the shell's Newton fails in the first windows. The line names the
+    time step and the start from rest, which runs."""
+    case, args = str(ROOT / "cases/beam_in_liquid"), ["--set", "actuation.frequency_hz=10"]
+    args += ["--set", "time.periods=0.1", "--quiet"]
+    code = run_cli.main([case, *args, "--output", str(tmp_path / "orbit")])
+    err = capsys.readouterr().err.strip()
+    assert code == 1
+    assert err.startswith("error: shell: Newton did not converge at t = ")
+    assert "--set time.start=rest" in err and "reduce the time step" in err
+    assert len(err.splitlines()) == 1
+    code = run_cli.main(
+        [case, *args, "--set", "time.start=rest", "--output", str(tmp_path / "rest")]
+    )
+    assert code == 0, capsys.readouterr().err

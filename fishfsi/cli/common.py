@@ -18,6 +18,7 @@ import numpy as np
 from fsi_orchestrator.case import Case, CaseError, load_case
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # the reader of stdout left (`| head`), as a shell's tools
 
 
 def plural(count: int, noun: str) -> str:
@@ -229,6 +230,10 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
     except (SolverError, ResumeError, RuntimeError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_FAILED
+    except BrokenPipeError:  # `--json | head`: the reader has what it wanted; no traceback
+        # stdout's buffer cannot be flushed at exit either: point it at /dev/null
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
         from fsi_orchestrator.participant import ParticipantStopped
 

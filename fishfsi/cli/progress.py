@@ -130,26 +130,32 @@ class RunProgress:
 
 
 class StopRequest:
-    """Set by SIGTERM (SLURM's time limit, scancel): the loop ends after the running window
-    with a checkpoint, where a kill would lose the windows since the last one."""
+    """Set by SIGTERM (SLURM's time limit, scancel) or a first Ctrl-C: the loop ends after the
+    running window with a checkpoint, where a kill would lose the windows since the last one.
+    A second Ctrl-C stops at once."""
 
     def __init__(self) -> None:
         self.signal: int | None = None
 
-    def __bool__(self) -> bool:
-        return self.signal is not None
+    def reason(self) -> str | None:
+        """The signal's name once one asked the run to stop."""
+        return None if self.signal is None else signal.Signals(self.signal).name
 
     @contextlib.contextmanager
     def on_sigterm(self) -> Iterator[StopRequest]:
         def request(signum, frame) -> None:
+            if signum == signal.SIGINT and self.signal is not None:
+                raise KeyboardInterrupt  # asked twice: stop now
             self.signal = signum
 
+        installed = []
         try:
-            previous = signal.signal(signal.SIGTERM, request)
+            for signum in (signal.SIGTERM, signal.SIGINT):
+                installed.append((signum, signal.signal(signum, request)))
         except ValueError:  # not the main thread: nothing to install
-            yield self
-            return
+            pass
         try:
             yield self
         finally:
-            signal.signal(signal.SIGTERM, previous)
+            for signum, previous in installed:
+                signal.signal(signum, previous)

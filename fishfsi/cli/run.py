@@ -15,12 +15,13 @@ import h5py
 import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
-from fsi_orchestrator.case.schema import AnalysisKind, FluidModel
+from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, StartMode
 from fsi_orchestrator.case.timing import case_schedule, windows_per_period
 from fsi_orchestrator.loop import OutputSettings, Schedule, StopRule, WindowLoop
 from fsi_orchestrator.periodic import summary_fields as periodic_fields
 from fsi_orchestrator.provenance import case_identity, run_attributes
 from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
+from solid_adapter.solvers import SolverError
 
 from .common import (
     EXIT_OK,
@@ -286,9 +287,16 @@ def run_dynamic(
                 on_window,
                 coupling,
                 stop_rules(explicit_growth_check(case), periodic_stop(case)),
-                stop.__bool__,
+                stop.reason,
             )
             path = loop.run(resume=resume)
+    except SolverError as err:
+        if case.time.start is not StartMode.PERIODIC or "Newton did not converge" not in str(err):
+            raise
+        raise SolverError(
+            f"{err}; or start from rest (--set time.start=rest): this run started on the linear "
+            "periodic orbit, which near a resonance can lie far from the large-deflection answer"
+        ) from None
     finally:
         if coupling is not None:
             coupling.fluid.finalize()
@@ -563,10 +571,11 @@ def _body(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-# a bare Ctrl-C; a SIGTERM in the windows ends the window with a checkpoint and says so
+# a Ctrl-C outside the windows (or a second one); SIGTERM or a first Ctrl-C in the windows
+# ends the window with a checkpoint and says so
 INTERRUPTED = (
-    "the results up to the last checkpoint are kept; continue with --resume (stopped in its "
-    "set-up, a run has none yet: run it again)"
+    "the results up to the last checkpoint are kept; continue with --resume (a run stopped "
+    "before its first checkpoint has none: run it again)"
 )
 
 
