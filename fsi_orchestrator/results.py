@@ -34,7 +34,12 @@ CHECKSUM_ATTR = "sha256"
 
 
 class OutputError(RuntimeError):
-    """A results or checkpoint file that cannot be written (disk full, no permission)."""
+    """A results or checkpoint file that cannot be written (disk full, no permission).
+    ``not_writable``: refused by its permissions or a read-only mount, not by a full disk."""
+
+    def __init__(self, message: str, *, not_writable: bool = False) -> None:
+        super().__init__(message)
+        self.not_writable = not_writable
 
 
 WRITE_FAULTS = (errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EROFS)
@@ -56,7 +61,9 @@ def write_failure(
         why, fix = "not writable", "make it writable"
     else:
         why, fix = f"write failed ({err.strerror or text})", "check the disk"
-    return OutputError(f"{path}: {why}; {kept}; {fix}, then {then}")
+    return OutputError(
+        f"{path}: {why}; {kept}; {fix}, then {then}", not_writable=why == "not writable"
+    )
 
 
 def h5_write_error(err: Exception) -> OSError | None:
@@ -135,9 +142,9 @@ def check_writable(
     room for a results file is refused."""
     targets = [directory / n for n in names if (directory / n).exists()]
     try:
-        _probe_write(directory)
+        probe_write(directory)
         if (directory / "vtk").is_dir():  # an earlier run's VTU/PVD series
-            _probe_write(directory / "vtk")
+            probe_write(directory / "vtk")
         for path in targets:
             os.close(os.open(path, os.O_WRONLY | os.O_APPEND))
     except OSError as err:
@@ -154,7 +161,8 @@ def check_writable(
 MIN_FREE_BYTES = 1 << 20
 
 
-def _probe_write(directory: Path) -> None:
+def probe_write(directory: Path) -> None:
+    """Create and remove a file in ``directory``: OSError where it refuses a new file."""
     probe = directory / f".write-probe-{os.getpid()}"
     try:
         with open(probe, "wb") as f:

@@ -36,6 +36,11 @@ class SolverError(RuntimeError):
     """The structural solve failed (no convergence, NaN); the message says where and why."""
 
 
+class NewtonNotConverged(SolverError):
+    """Newton's iterations ran out before the increments met the tolerance (not a singular
+    tangent, not NaN): the callers tell it by its type, not by its words."""
+
+
 @dataclass(frozen=True)
 class NewtonSettings:
     tolerance: float = 1e-8
@@ -279,7 +284,7 @@ class _NewtonIteration:
                 self.r = None
         return False
 
-    def _not_converged(self) -> SolverError:
+    def _not_converged(self) -> NewtonNotConverged:
         limit = self.settings.max_iterations
         cure = (
             "reduce the load step (more analysis.load_steps)"
@@ -291,7 +296,7 @@ class _NewtonIteration:
                 f"allow more iterations (analysis.max_newton_iterations, default "
                 f"{NewtonSettings.max_iterations}) or {cure}"
             )
-        return SolverError(
+        return NewtonNotConverged(
             f"shell: Newton did not converge {self.where} in {limit} "
             f"iteration{'s' if limit != 1 else ''} (last scaled increment "
             f"{min(self.size, self.previous):.2e}); {cure}"

@@ -45,7 +45,7 @@ def test_the_api_runs_a_case_as_fsi_run_does(tmp_path):
 
 
 def test_the_api_refuses_bad_input_with_the_commands_line():
-    with pytest.raises(fsi.CaseError, match=r"actuation.frequency_hz must be > 0, got -3"):
+    with pytest.raises(fsi.CaseError, match=r"actuation.frequency_hz must be >= 0.01, got -3"):
         fsi.load_case(ROOT / "cases/fish_vacuum_3Hz", overrides=["actuation.frequency_hz=-3"])
 
 

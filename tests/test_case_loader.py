@@ -28,19 +28,30 @@ def error_of(tmp_path, text, overrides=()):
     return str(err.value)
 
 
+FREQUENCY_LIMIT = "actuation.frequency_hz must be >= 0.01, got {} (range: 0.01 <= x <= 1000 Hz)"
+
+
 def test_negative_frequency_names_the_key(tmp_path):
     msg = error_of(tmp_path, "[actuation]\nfrequency_hz = -3\n")
-    assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
+    assert msg == "case.toml: " + FREQUENCY_LIMIT.format(-3)
+
+
+def test_a_frequency_below_the_limit_names_the_limit_itself(tmp_path):
+    """The key is declared > 0 and >= 0.01 Hz: 0 Hz said "must be > 0", which 0.005 Hz
+    passes and is refused all the same."""
+    for value in ("0", "0.005"):
+        msg = error_of(tmp_path, "", [f"actuation.frequency_hz={value}"])
+        assert msg == f"--set 'actuation.frequency_hz={value}': " + FREQUENCY_LIMIT.format(value)
 
 
 def test_override_is_validated_like_the_file_and_named_as_the_set(tmp_path):
     msg = error_of(tmp_path, "", ["actuation.frequency_hz=-3"])
-    assert msg == "--set 'actuation.frequency_hz=-3': actuation.frequency_hz must be > 0, got -3"
+    assert msg == "--set 'actuation.frequency_hz=-3': " + FREQUENCY_LIMIT.format(-3)
     msg = error_of(tmp_path, "[actuation]\nfrequency_hz = 3\n", ["fluid.modle=potential"])
     assert msg.startswith("--set 'fluid.modle=potential': fluid.modle is not a known key")
     # the file's own key is still the file's, whatever else --set gives
     msg = error_of(tmp_path, "[actuation]\nfrequency_hz = -3\n", ["fluid.model=potential"])
-    assert msg == "case.toml: actuation.frequency_hz must be > 0, got -3"
+    assert msg == "case.toml: " + FREQUENCY_LIMIT.format(-3)
     # a list's item is the --set's that gave the list
     msg = error_of(tmp_path, "", ["actuation.left_volts=[nan, 1500]"])
     assert msg.startswith("--set 'actuation.left_volts=[nan, 1500]': actuation.left_volts[0]")
@@ -121,12 +132,33 @@ def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
             '[geometry]\nkind = "beam"\n[boundary]\nhead = "elastic"\n',
             'boundary.head = "elastic" is the fish\'s head on springs; for geometry.kind = "beam"',
         ),
-        ("[analysis\nkind = 1\n", "not valid TOML"),
     ],
 )
 def test_bad_input_gives_one_line_naming_the_key(tmp_path, text, expected):
     msg = error_of(tmp_path, text)
     assert expected in msg and msg.startswith("case.toml: ") and "\n" not in msg
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        ("[analysis\nkind = 1\n", "not valid TOML: "),
+        ("[actuation]\nleft_volts = " + "[" * 3000 + "]" * 3000 + "\n", "actuation.left_volts is"),
+        ("[loads]\npressure_pa = 1" + "0" * 5000 + "\n", "loads.pressure_pa: "),
+    ],
+    ids=["syntax", "nested", "long integer"],
+)
+def test_a_file_the_toml_reader_refuses_is_named_with_its_folder(
+    tmp_path, monkeypatch, text, expected
+):
+    """As given (cases/foo/case.toml): a bare case.toml did not say which case's."""
+    (tmp_path / "foo").mkdir()
+    write_case(tmp_path / "foo", text)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(CaseError) as err:
+        load_case("foo")
+    msg = str(err.value)
+    assert msg.startswith(f"foo/case.toml: {expected}") and "\n" not in msg, msg
 
 
 def test_missing_case_file(tmp_path):
@@ -167,7 +199,7 @@ def test_cli_bad_input_exits_2_with_one_line(tmp_path, capsys):
     write_case(tmp_path, "[actuation]\nfrequency_hz = -3\n")
     assert run_cli.main([str(tmp_path), "--json"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == "error: case.toml: actuation.frequency_hz must be > 0, got -3"
+    assert err == "error: case.toml: " + FREQUENCY_LIMIT.format(-3)
 
 
 def test_resume_and_overwrite_together_are_refused(tmp_path, capsys):

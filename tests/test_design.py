@@ -97,6 +97,13 @@ def test_one_at_a_time_records_every_design_and_the_best_is_the_tables_max(finis
         assert (out / name).stat().st_size > 0
 
 
+def test_the_evaluations_table_has_unix_line_ends(finished):
+    """csv's default "\\r\\n" showed as ^M in a terminal, diff and awk."""
+    _, out, _ = finished
+    text = (out / "evaluations.csv").read_bytes()
+    assert b"\r" not in text and text.endswith(b"\n")
+
+
 def test_the_linear_evaluation_is_fsi_sweeps_linear_response(finished):
     """Reference: fsi-sweep --method linear (linear_sweep) on the same case at 2 and 4 Hz."""
     _, out, _ = finished

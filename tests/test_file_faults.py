@@ -207,33 +207,67 @@ def test_a_resume_where_no_run_was_leaves_no_folder(tmp_path, capsys):
 
 
 # ------------------------------------------------------------------ folders that cannot be written
-def test_a_read_only_output_folder_is_refused_before_the_set_up(done, capsys, monkeypatch):
+def make_read_only(folder: Path, monkeypatch) -> None:
     """As root the mode bits do not stop a write (a read-only mount would): there the probe
     write is made to fail as the mount would make it."""
-    case, out = done
-    fresh = out.parent / "read_only"
-    fresh.mkdir()
     if os.geteuid() == 0:
 
         def refused(directory):
             raise PermissionError(errno.EROFS, os.strerror(errno.EROFS), str(directory))
 
-        monkeypatch.setattr(results_mod, "_probe_write", refused)
+        monkeypatch.setattr(results_mod, "probe_write", refused)
     else:
-        fresh.chmod(0o555)
+        folder.chmod(0o555)
+
+
+def test_a_read_only_output_folder_is_refused_before_the_set_up(done, capsys, monkeypatch):
+    """Bad input (exit 2), as an --output that cannot be made."""
+    case, out = done
+    fresh = out.parent / "read_only"
+    fresh.mkdir()
+    make_read_only(fresh, monkeypatch)
     built = []
     monkeypatch.setattr(run_cli, "run_dynamic", lambda *a, **k: built.append(1))
     try:
         code, lines = run(capsys, case, "--output", fresh)
     finally:
         fresh.chmod(0o755)
-    assert code == 1 and not built
+    assert code == 2 and not built
     one_line_naming(lines, fresh, "not writable", "nothing was run")
     assert list(fresh.iterdir()) == []
 
 
+def test_a_read_only_output_folder_is_bad_input_to_fsi_sweep_as_to_fsi_run(
+    done, capsys, monkeypatch
+):
+    """fsi-sweep refuses it with exit 2 too (fsi-run said 1): an empty one, and one holding
+    an earlier sweep's rows folder (its mkdir passes), before --overwrite deletes anything."""
+    case, out = done
+    empty, earlier = out.parent / "read_only", out.parent / "read_only_sweep"
+    empty.mkdir()
+    (earlier / "sweep_rows").mkdir(parents=True)
+    (earlier / "sweep.csv").write_text("waveform,frequency_hz\n")
+    codes = []
+    for folder, flags in ((empty, []), (earlier, ["--overwrite"])):
+        make_read_only(folder, monkeypatch)
+        try:
+            codes.append(
+                sweep_cli.main([str(case), "--frequencies", "5", "--output", str(folder), *flags])
+            )
+        finally:
+            folder.chmod(0o755)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert codes == [2, 2]
+    assert len(lines) == 2, lines
+    for line, folder in zip(lines, (empty, earlier), strict=True):
+        assert line.startswith(f"error: --output {folder}: cannot write there ("), line
+    assert list(empty.iterdir()) == []
+    assert sorted(p.name for p in earlier.iterdir()) == ["sweep.csv", "sweep_rows"]
+
+
 def test_a_read_only_results_file_is_refused_before_the_set_up(done, capsys, monkeypatch):
-    """Resuming where results.h5 cannot be opened for writing."""
+    """Resuming where results.h5 cannot be opened for writing: bad input, as a read-only
+    folder."""
     case, out = done
     results = out / "results.h5"
     real_open = os.open
@@ -245,7 +279,7 @@ def test_a_read_only_results_file_is_refused_before_the_set_up(done, capsys, mon
 
     monkeypatch.setattr(results_mod.os, "open", guarded_open)
     code, lines = run(capsys, case, "--resume")
-    assert code == 1
+    assert code == 2
     one_line_naming(lines, results, "not writable")
 
 

@@ -99,6 +99,40 @@ def test_an_uncertainty_not_known_yet_is_null_in_strict_json(tmp_path):
     assert strict_json((tmp_path / "run" / "summary.json").read_text()) == summary
 
 
+def test_a_figure_not_known_yet_prints_as_none_in_the_plain_summary_too(capsys):
+    """What --json prints as null (an infinite uncertainty, a NaN, None) is "none" in the
+    plain summary as well, alone or in a list or a table; it printed inf and nan."""
+    import numpy as np
+
+    from fishfsi.cli.common import emit
+
+    summary = {
+        "tip_amplitude_periodic_uncertainty_m": math.inf,
+        "non_fluid_share": np.float64("nan"),
+        "iterated_fluid_solves_per_window": None,
+        "mean_thrust_per_period_n": [0.0125, -math.inf],
+        "start_correction": {"added_mass_kg": 1.5e-4, "damping_ns_m": math.nan},
+        "tip_amplitude_m": 0.00784512345,
+        "windows": 40,
+        "periodic": False,
+    }
+    emit(summary, as_json=True)
+    printed = strict_json(capsys.readouterr().out)
+    emit(summary, as_json=False)
+    lines = dict(line.strip().split(": ", 1) for line in capsys.readouterr().out.splitlines())
+    assert lines == {
+        "tip_amplitude_periodic_uncertainty_m": "none",
+        "non_fluid_share": "none",
+        "iterated_fluid_solves_per_window": "none",
+        "mean_thrust_per_period_n": "[0.0125, none]",
+        "start_correction": "{added_mass_kg: 0.00015, damping_ns_m: none}",
+        "tip_amplitude_m": "0.00784512",
+        "windows": "40",
+        "periodic": "False",
+    }
+    assert [k for k, v in printed.items() if v is None] == list(summary)[:3]
+
+
 def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
     summary = vacuum_fish_summary(tmp_path / "run", 2)
     assert summary["windows_per_period"] == 20 and summary["periodic_tolerance"] == 0.01

@@ -115,6 +115,8 @@ def test_fsi_post_draws_the_mesh_reference_and_lists_both_errors(tmp_path, capsy
     assert code == 0
     with open(tmp_path / "coarse" / "sweep_errors.csv", newline="") as fh:
         table = list(csv.DictReader(fh))
+    # "\n" line ends, as sweep.csv (csv's default "\r\n" showed as ^M)
+    assert b"\r" not in (tmp_path / "coarse" / "sweep_errors.csv").read_bytes()
     assert [r["mesh_error"] for r in table] == ["measured", "interpolated", "interpolated"]
     # a failed point's NaN row says why
     assert [r["status"] for r in table] == ["ok", "ok", "failed: coupling diverged"]

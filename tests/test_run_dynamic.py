@@ -332,3 +332,42 @@ def test_a_newton_failure_on_the_periodic_orbit_names_a_start_from_rest(tmp_path
         [case, *args, "--set", "time.start=rest", "--output", str(tmp_path / "rest")]
     )
     assert code == 0, capsys.readouterr().err
+
+
+def test_a_resume_of_a_finished_run_reports_the_runs_wall_time(tmp_path, capsys):
+    """wall_s is the recorded windows' wall time (every invocation's) and this call's after
+    them: a --resume of a finished run said the few seconds of the resume call instead."""
+    case = make(tmp_path, vtk="false")
+    assert run_cli.main([str(case), "--json", "--quiet"]) == 0
+    fresh = json.loads(capsys.readouterr().out)
+    with h5py.File(fresh["results"], "a") as h5:
+        assert fresh["wall_s"] >= h5["wall_s"][:, 0].sum()
+        h5["wall_s"][:] = 60.0  # as a run of 40 minutes
+    assert run_cli.main([str(case), "--json", "--quiet", "--resume"]) == 0
+    resumed = json.loads(capsys.readouterr().out)
+    assert 40 * 60.0 <= resumed["wall_s"] < 40 * 60.0 + 30
+
+
+def test_a_newton_failure_is_told_by_its_type_not_its_words(tmp_path, capsys, monkeypatch):
+    """The start-from-rest advice goes with the shell's NewtonNotConverged (a SolverError),
+    whatever its words, and not with another SolverError that uses them."""
+    from fsi_orchestrator.loop import WindowLoop
+    from solid_adapter.solvers import NewtonNotConverged, SolverError
+
+    with pytest.raises(NewtonNotConverged):  # the shell's own, with too few iterations
+        run_static(load_case(make(tmp_path), ["analysis.max_newton_iterations=1"]))
+    case = beam_case(tmp_path / "beam")
+    errors = {
+        "newton": NewtonNotConverged("shell: no convergence at t = 0.01 s"),
+        "other": SolverError("shell: Newton did not converge, said another solver"),
+    }
+    advised = {}
+    for name, error in errors.items():
+
+        def failing(self, resume=False, error=error):
+            raise error
+
+        monkeypatch.setattr(WindowLoop, "run", failing)
+        assert run_cli.main([str(case), "--quiet", "--output", str(tmp_path / name)]) == 1
+        advised[name] = "--set time.start=rest" in capsys.readouterr().err
+    assert advised == {"newton": True, "other": False}

@@ -82,6 +82,12 @@ def test_fsi_sweep_writes_the_table_and_fsi_post_draws_it(tmp_path, capsys):
     assert (out / "sweep.png").stat().st_size > 10_000
 
 
+def test_the_sweep_table_has_unix_line_ends(tmp_path):
+    """csv's default "\\r\\n" showed as ^M in a terminal, diff and awk."""
+    sweep_cli.write_tables([{"waveform": "sine", "frequency_hz": 2.0, "status": "ok"}], tmp_path)
+    assert (tmp_path / "sweep.csv").read_bytes() == b"waveform,frequency_hz,status\nsine,2.0,ok\n"
+
+
 def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, monkeypatch):
     """A run that fails (here: the 2nd of three) becomes a row with its error and no figures
     (null in strict JSON, an empty cell); the other runs' rows are written and the sweep exits

@@ -186,6 +186,25 @@ def peak(rows: list[dict], key: str = "swimming_speed_m_s") -> dict:
     return max(rows, key=lambda r: r[key])
 
 
+def test_a_swimming_sweeps_table_shows_the_speed_not_the_thrust(capsys):
+    """The free fish's figure is its speed (m/s and body lengths per second); the held
+    fish's table keeps its thrust. A failed point shows '-'."""
+    held = {"waveform": "square", "frequency_hz": 18.0, "tip_amplitude_m": 0.0081}
+    held |= {"slender_body_mean_thrust_n": 0.0123, "status": "ok"}
+    free = {**held, "swimming_speed_m_s": 1.4231, "body_lengths_per_s": 8.52}
+    failed = {**held, "frequency_hz": 25.0, "tip_amplitude_m": float("nan"), "status": "failed"}
+    sweep.print_table([free, failed])
+    head, *lines = capsys.readouterr().out.splitlines()
+    assert "speed [m/s]" in head and "body lengths/s" in head and "thrust" not in head
+    assert lines[0].split() == ["square", "18.00", "8.10", "1.423", "8.52", "ok"]
+    assert lines[1].split() == ["square", "25.00", "-", "-", "-", "failed"]
+    assert "speed 1.42 m/s" in sweep.progress_line(free, 0.5, 1, 2)
+    sweep.print_table([held])
+    head, line = capsys.readouterr().out.splitlines()
+    assert "thrust [mN]" in head and "speed" not in head
+    assert line.split() == ["square", "18.00", "8.10", "12.30", "ok"]
+
+
 def test_sweep_rows_carry_the_swimming_columns(square_curves):
     for rows in square_curves.values():
         for row in rows:

@@ -175,17 +175,30 @@ def json_text(value: Any, indent: int | None = None) -> str:
     return json.dumps(to_jsonable(value), indent=indent, allow_nan=False)
 
 
+# a figure --json prints as null (not known yet, or a failed point's), in the plain summary
+NOT_KNOWN = "none"
+
+
+def plain_text(value: Any) -> str:
+    """One value of the plain summary: numbers to 6 digits, and what --json prints as null
+    (None, NaN, infinity) as NOT_KNOWN, in lists and tables too."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return NOT_KNOWN
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, list):
+        return "[" + ", ".join(plain_text(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {plain_text(v)}" for k, v in value.items()) + "}"
+    return str(value)
+
+
 def emit(summary: dict[str, Any], as_json: bool) -> None:
     if as_json:
         print(json_text(summary))
         return
-    summary = plain(summary)
-    for key, value in summary.items():
-        if isinstance(value, list) and value and isinstance(value[0], float):
-            value = "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
-        elif isinstance(value, float):
-            value = f"{value:.6g}"
-        print(f"{key:>32}: {value}")
+    for key, value in plain(summary).items():
+        print(f"{key:>32}: {plain_text(value)}")
 
 
 @contextlib.contextmanager

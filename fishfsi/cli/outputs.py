@@ -19,6 +19,7 @@ from fsi_orchestrator.results import (
     CHECKPOINT_FILE,
     MIN_FREE_BYTES,
     RESULTS_FILE,
+    OutputError,
     check_writable,
     read_checkpoint,
     write_failure,
@@ -53,7 +54,14 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
             f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "
             "--resume, write elsewhere with --output, or replace it with --overwrite"
         )
-    check_writable(output)
+    try:
+        check_writable(output)
+    except OutputError as err:
+        if not err.not_writable:  # a full disk is the machine's state, not the input's
+            raise
+        # a folder given that cannot be written is bad input, as one that cannot be made
+        # (exit 2, as fsi-sweep and fsi-post refuse it)
+        raise CaseError(str(err)) from None
     if resume:
         check_results_readable(output / RESULTS_FILE, checkpoint)
     return bool(held) and not resume

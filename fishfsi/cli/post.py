@@ -272,7 +272,8 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
     fig.tight_layout()
     if table:
         with open(output / "sweep_errors.csv", "w", newline="") as fh:
-            writer = csv.DictWriter(fh, fieldnames=list(table[0]))
+            # "\n" line ends, as sweep.csv (csv's default is "\r\n")
+            writer = csv.DictWriter(fh, fieldnames=list(table[0]), lineterminator="\n")
             writer.writeheader()
             writer.writerows(table)
     target = output / "sweep.png"

@@ -69,6 +69,7 @@ from .linear import (
     point_name,
     with_drive,
 )
+from .swimming import SWIMMING_KEYS
 
 ROWS_FOLDER = "sweep_rows"  # one finished point's row per file
 SWEEP_CASE_FILE = "sweep_case.json"  # what was swept: --resume refuses another case
@@ -87,7 +88,12 @@ PERIODIC_KEYS = (
 
 def parse_frequencies(text: str) -> list[float]:
     """ "1:25:2" -> 1, 3, ..., 25; "3,5,10" -> those."""
-    usage = f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz, all > 0)"
+    field = next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz")
+    spec = spec_of(field)  # each point is a case: the key's own range holds
+    usage = (
+        f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz, each from {spec.ge:g} to "
+        f"{spec.le:g})"
+    )
     try:
         if ":" in text:
             start, stop, step = (float(v) for v in text.split(":"))
@@ -118,10 +124,9 @@ def parse_frequencies(text: str) -> list[float]:
             same = "twice" if seen[name] == f else f"as {seen[name]!r} and {f!r} (the same point)"
             raise CaseError(f"--frequencies {text!r}: {name} Hz is given {same}")
         seen[name] = f
-    field = next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz")
-    for f in frequencies:  # each point is a case: the key's own range holds
+    for f in frequencies:
         try:
-            coerce("actuation.frequency_hz", float(f), float, spec_of(field))
+            coerce("actuation.frequency_hz", float(f), float, spec)
         except CaseError as err:
             raise CaseError(f"--frequencies {text!r}: {err}") from None
     return frequencies
@@ -373,7 +378,8 @@ def write_tables(rows: list[dict], output: Path) -> None:
     output.mkdir(parents=True, exist_ok=True)
     fields = list(dict.fromkeys(k for r in rows for k in r))
     text = io.StringIO(newline="")
-    writer = csv.DictWriter(text, fieldnames=fields, restval="")
+    # "\n" line ends, as every other text file the tool writes (csv's default is "\r\n")
+    writer = csv.DictWriter(text, fieldnames=fields, restval="", lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     atomic_write(output / "sweep.csv", text.getvalue())
@@ -464,7 +470,7 @@ class SweepTable:
         that point's own row or run is there. A ``resume`` into a folder whose tables have no
         ``sweep_case.json`` is refused: its rows cannot be told to be this case's. Each
         refusal comes before anything there is written."""
-        from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE
+        from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE, probe_write
 
         run = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (self.output / n).is_file()]
         if run:  # fsi-post would draw the sweep and no longer find the run
@@ -485,7 +491,11 @@ class SweepTable:
         if not resume and not overwrite:
             self._refuse_to_replace(names, point)
         try:
-            self.rows_dir.mkdir(parents=True, exist_ok=True)
+            # a read-only folder that is there already passes a mkdir: refused before an
+            # --overwrite deletes anything or a point runs
+            for folder in (self.output, self.rows_dir):
+                folder.mkdir(parents=True, exist_ok=True)
+                probe_write(folder)
         except OSError as err:
             raise CaseError(cannot_write(self.output, err)) from None
         done: set[str] = set()
@@ -615,26 +625,45 @@ def _thrust(row: dict) -> float | None:
     return row.get("slender_body_mean_thrust_n") if thrust is None else thrust
 
 
+def _figure(value: float | None, spec: str) -> str:
+    """A figure as it is; a failed point's (null in the tables) as '-'."""
+    return "-" if value is None or not np.isfinite(value) else format(value, spec)
+
+
+def _swimming(rows: list[dict]) -> bool:
+    """A swimming case's sweep: its figure is the free fish's speed, not a held fish's
+    thrust (a failed point's row may lack the swimming columns)."""
+    return any(SWIMMING_KEYS[0] in r for r in rows)
+
+
 def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
     """One finished point, for logs: ``sweep: point 3/26 sine 5 Hz: ...``."""
     thrust = _thrust(row)
     status = row.get("status", "ok")
     tail = "" if status == "ok" else f"; {status}"
-    thrust_text = "" if thrust is None else f"thrust {_milli(thrust, '.3g')} mN, "
+    figure = "" if thrust is None else f"thrust {_milli(thrust, '.3g')} mN, "
+    if _swimming([row]):
+        figure = f"speed {_figure(row.get('swimming_speed_m_s'), '.3g')} m/s, "
     return (
         f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: tip "
-        f"amplitude {_milli(row.get('tip_amplitude_m'), '.3g')} mm, {thrust_text}"
+        f"amplitude {_milli(row.get('tip_amplitude_m'), '.3g')} mm, {figure}"
         f"{wall_s:.1f} s{tail}"
     )
 
 
 def print_table(rows: list[dict]) -> None:
-    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {'thrust [mN]':>12}")
+    swimming = _swimming(rows)
+    figures = f"{'speed [m/s]':>12} {'body lengths/s':>14}" if swimming else f"{'thrust [mN]':>12}"
+    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {figures}")
     for r in rows:
+        if swimming:
+            speed = _figure(r.get("swimming_speed_m_s"), ".3f")
+            figures = f"{speed:>12} {_figure(r.get('body_lengths_per_s'), '.2f'):>14}"
+        else:
+            figures = f"{_milli(_thrust(r), '.2f'):>12}"
         print(
             f"{r['waveform']:>8} {r['frequency_hz']:7.2f} "
-            f"{_milli(r.get('tip_amplitude_m'), '.2f'):>19} {_milli(_thrust(r), '.2f'):>12}  "
-            f"{r.get('status', '')}"
+            f"{_milli(r.get('tip_amplitude_m'), '.2f'):>19} {figures}  {r.get('status', '')}"
         )
 
 

@@ -43,7 +43,8 @@ def write_tables(records: list[dict], study: Study, output: Path) -> None:
     if not rows:
         return
     text = io.StringIO(newline="")
-    writer = csv.DictWriter(text, fieldnames=list(rows[0]))
+    # "\n" line ends, as every other text file the tool writes (csv's default is "\r\n")
+    writer = csv.DictWriter(text, fieldnames=list(rows[0]), lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
     atomic_write(output / "evaluations.csv", text.getvalue())

@@ -108,8 +108,8 @@ def load_case(
 
 def blame_override(message: str, overrides: list[str], *, derived: bool = False) -> str:
     """A message about a key that --set gave names the --set, not the file: "case.toml:
-    actuation.frequency_hz must be > 0, ..." -> "--set 'actuation.frequency_hz=-3':
-    actuation.frequency_hz must be > 0, ..."."""
+    actuation.frequency_hz must be >= 0.01, ..." -> "--set 'actuation.frequency_hz=-3':
+    actuation.frequency_hz must be >= 0.01, ..."."""
     prefix = f"{CASE_FILE}: "
     if not message.startswith(prefix):
         return message
@@ -155,16 +155,17 @@ def _read_toml(path: Path) -> dict[str, Any]:
             f"{path}: not UTF-8 text (byte 0x{data[err.start]:02x} at offset {err.start}); "
             f"{CASE_FILE} must be UTF-8 TOML"
         ) from None
+    # the file as given (cases/foo/case.toml): a bare "case.toml" does not say which
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise CaseError(f"{CASE_FILE}: not valid TOML: {err}") from None
+        raise CaseError(f"{path}: not valid TOML: {err}") from None
     except RecursionError:
         where = _key_on_line(text, lambda line: line.count("[") + line.count("{") > 50)
-        raise CaseError(f"{CASE_FILE}: {where or 'a value'} is nested too deeply") from None
+        raise CaseError(f"{path}: {where or 'a value'} is nested too deeply") from None
     except ValueError as err:  # an integer literal of more than 4300 digits
         where = _key_on_line(text, lambda line: re.search(r"\d{1000}", line) is not None)
-        raise CaseError(f"{CASE_FILE}: {where or 'a value'}: {err}") from None
+        raise CaseError(f"{path}: {where or 'a value'}: {err}") from None
 
 
 _TABLE = re.compile(r"^\s*\[+\s*([A-Za-z0-9_.\- ]+?)\s*\]")

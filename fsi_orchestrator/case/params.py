@@ -144,8 +144,11 @@ def coerce(key: str, value: Any, tp: Any, spec: ParamSpec) -> Any:
 
 def _check_bounds(key: str, v: float, spec: ParamSpec) -> None:
     shown, span = _show(v), _range(spec)
+    # where both lower limits are declared (> 0 and >= 0.01 Hz) the tighter one is stated:
+    # "must be > 0" for 0 Hz hid that 0.005 Hz is refused too
+    ge_binds = spec.ge is not None and (spec.gt is None or spec.ge > spec.gt)
     # a sign error ("must be > 0, got -3") needs no range; every other violation gives it
-    if spec.gt is not None and not v > spec.gt:
+    if spec.gt is not None and not ge_binds and not v > spec.gt:
         raise CaseError(f"{key} must be > {spec.gt:g}, got {shown}{span if spec.gt else ''}")
     if spec.ge is not None and not v >= spec.ge:
         raise CaseError(f"{key} must be >= {spec.ge:g}, got {shown}{span if spec.ge else ''}")
