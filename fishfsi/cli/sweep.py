@@ -617,7 +617,7 @@ class SweepTable:
 
 def _milli(value: float | None, spec: str) -> str:
     """A figure in milli-units; a failed point's (null in the tables) as '-'."""
-    return "-" if value is None or not np.isfinite(value) else format(1e3 * value, spec)
+    return _figure(value, spec, scale=1e3)
 
 
 def _thrust(row: dict) -> float | None:
@@ -625,9 +625,9 @@ def _thrust(row: dict) -> float | None:
     return row.get("slender_body_mean_thrust_n") if thrust is None else thrust
 
 
-def _figure(value: float | None, spec: str) -> str:
-    """A figure as it is; a failed point's (null in the tables) as '-'."""
-    return "-" if value is None or not np.isfinite(value) else format(value, spec)
+def _figure(value: float | None, spec: str, scale: float = 1.0) -> str:
+    """A figure (times ``scale``); a failed point's (null in the tables) as '-'."""
+    return "-" if value is None or not np.isfinite(value) else format(scale * value, spec)
 
 
 def _swimming(rows: list[dict]) -> bool:
