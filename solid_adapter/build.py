@@ -12,6 +12,7 @@ from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
 from .buckling import check_mean_voltage
+from .feedback import PeriodicFeedback
 from .geometry import build_layout
 from .harmonic import (
     ModalCorrection,
@@ -104,15 +105,16 @@ def structural_damping(case: Case, model: ShellModel) -> RayleighDamping | None:
     return RayleighDamping(0.0, eta / max(omega, first))
 
 
-def build_damping(case: Case, model: ShellModel):
-    """Rayleigh damping, the structure's loss factor and the fast fluid's damping the model
-    carries, or None."""
+def build_damping(case: Case, model: ShellModel, feedback: PeriodicFeedback | None = None):
+    """Rayleigh damping, the structure's loss factor, the fast fluid's damping the model
+    carries and the periodic ``feedback``, or None."""
     parts = [
         d
         for d in (
             rayleigh_damping(case, model),
             structural_damping(case, model),
             model.fluid_damping,
+            feedback,
         )
         if d is not None
     ]
@@ -132,13 +134,23 @@ def bending_frequencies(model: ShellModel, count: int) -> NDArray:
     return np.array(found[:count])
 
 
-def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
+def periodic_feedback(case: Case) -> PeriodicFeedback | None:
+    """time.periodic_feedback_per_s as the structure's delayed feedback (None: off)."""
+    gain = case.time.periodic_feedback_per_s
+    if not gain or not has_actuators(case):
+        return None
+    return PeriodicFeedback(gain, case.time.steps_per_period)
+
+
+def build_integrator(
+    case: Case, model: ShellModel, feedback: PeriodicFeedback | None = None
+) -> TimeIntegrator:
     a = case.analysis
     return make_integrator(
         a.integrator.value,
         model,
         a.rho_infinity,
-        build_damping(case, model),
+        build_damping(case, model, feedback),
         newton_settings(case),
     )
 
@@ -146,15 +158,16 @@ def build_integrator(case: Case, model: ShellModel) -> TimeIntegrator:
 def build_shell_participant(case: Case, model: ShellModel | None = None) -> ShellParticipant:
     model = model or build_shell_model(case)
     loads = static_loads(case, model)
-    integrator = build_integrator(case, model)
+    feedback = periodic_feedback(case)
+    integrator = build_integrator(case, model, feedback)
     if not has_actuators(case):
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
     drive = DriveSignal.from_case(case)
     check_mean_voltage(model, drive.mean)
+    orbit = None
     if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
         orbit = periodic_orbit(case, model, drive, loads, integrator)
-        return ShellParticipant(model, integrator, drive.volts, loads, orbit=orbit)
-    return ShellParticipant(model, integrator, drive.volts, loads)
+    return ShellParticipant(model, integrator, drive.volts, loads, orbit=orbit, feedback=feedback)
 
 
 # Fewest time steps per period of a harmonic that the periodic start holds. A square wave's

@@ -26,6 +26,7 @@ from fsi_orchestrator.participant import (
     State,
 )
 
+from .feedback import PeriodicFeedback
 from .harmonic import PeriodicResponse
 from .shell import NDOF, ShellModel
 from .solvers import AddedMassAsForce, DynamicState, TimeIntegrator
@@ -53,8 +54,10 @@ class ShellParticipant:
         v0: NDArray | None = None,
         a0: NDArray | None = None,
         orbit: PeriodicResponse | None = None,
+        feedback: PeriodicFeedback | None = None,
     ) -> None:
-        """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0."""
+        """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0. ``feedback``:
+        the integrator's delayed feedback toward the periodic state, fed here."""
         self.model = model
         self.volts = volts
         self.loads = loads
@@ -65,6 +68,7 @@ class ShellParticipant:
         on_axis = np.flatnonzero(np.abs(model.mesh.nodes[:, 1]) < 1e-12 * model.layout.length_m)
         self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
         self.orbit = orbit
+        self.feedback = feedback
         if orbit is not None:
             if x0 is not None or v0 is not None or a0 is not None:
                 raise ValueError("give either a start state (x0, v0, a0) or an orbit, not both")
@@ -83,6 +87,8 @@ class ShellParticipant:
             self.state.t, self.external_load, self.volts, *orbit.at(self.state.t)
         )
         self._checkpoint, self._answer = None, None
+        if self.feedback is not None:
+            self.feedback.forget()
 
     def take_added_mass(self, preconditioning: AddedMassPreconditioning | None) -> None:
         """Carry the *-am schemes' preconditioning added mass: in the inertia, and taken by the
@@ -160,6 +166,9 @@ class ShellParticipant:
             self._pressure = np.asarray(data[PRESSURE], dtype=float).reshape(self.model.n_nodes)
 
     def solve(self, dt: float) -> None:
+        if self.feedback is not None:
+            orbit = None if self.orbit is None else self.orbit.at(self.state.t + dt)[1]
+            self.feedback.prepare(round(self.state.t / dt), self.state.v, orbit)
         self.state = self.integrator.step(
             self.state, dt, self.external_load, self.volts, guess=self._answer
         )
@@ -200,7 +209,15 @@ class ShellParticipant:
     def save_state(self) -> dict[str, NDArray | float | int]:
         self.integrator.kept_tangent.forget()  # the resumed run starts without it too
         s = self.state
+        feedback: dict[str, NDArray] = {}
+        if self.feedback is not None:
+            steps, velocities = self.feedback.history()
+            feedback = {
+                "feedback_steps": steps,
+                "feedback_velocities": velocities.reshape(len(steps), self.model.ndof),
+            }
         return {
+            **feedback,
             "t": s.t,
             "x": s.x.copy(),
             "v": s.v.copy(),
@@ -239,6 +256,10 @@ class ShellParticipant:
         self.integrator.newton_iterations = int(state["newton_iterations"])
         self.integrator.kept_tangent.forget()
         self._answer = None
+        if self.feedback is not None:
+            steps = np.asarray(state.get("feedback_steps", np.zeros(0)), dtype=np.int64)
+            velocities = np.asarray(state.get("feedback_velocities", np.zeros((0, 0))))
+            self.feedback.restore(steps, velocities)  # none recorded: it records a period again
 
     def finalize(self) -> None:
         pass

@@ -285,6 +285,12 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             "time.periodic_tolerance counts periods of the drive (time.periods); a run given "
             "by time.step_s / time.end_time_s has none: remove one or the other"
         )
+    if t.periodic_feedback_per_s and t.step_s is not None:
+        raise CaseError(
+            "time.periodic_feedback_per_s feeds back the motion one drive period earlier; a run "
+            "given by time.step_s / time.end_time_s has no whole number of steps per period: "
+            "remove one or the other"
+        )
     c = case.coupling
     if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
         raise CaseError(

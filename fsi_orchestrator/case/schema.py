@@ -549,6 +549,16 @@ class Time:
         gt=0,
         lt=1,
     )
+    periodic_feedback_per_s: float = param(
+        0.0,
+        "dynamic with actuation: rate g of a delayed feedback f = -g M (v(t) - v(t - T)) on "
+        "the structure (Pyragas), zero on a periodic motion, so the periodic state is the same; "
+        "it damps what does not repeat from period to period, such as the coupled start-up's "
+        "slow beat. 0: off (docs/coupling.md).",
+        unit="1/s",
+        ge=0,
+        le=1e4,
+    )
     start: StartMode = param(
         StartMode.PERIODIC,
         "dynamic with actuation: start on the linear periodic response (no start-up "

@@ -1,0 +1,78 @@
+"""Time-delayed feedback toward the periodic state (Pyragas 1992, Phys. Lett. A 170, 421).
+
+    f = -g M (v(t) - v(t - T))
+
+with T the drive's period, M the structure's inertia (with the liquid's added mass where the
+model carries it) and g a rate (1/s). On a T-periodic motion the force is exactly zero, so the
+periodic state is the one without it; away from it the force damps whatever does not repeat
+from period to period. A free motion at frequency f_m gets the damping ratio
+g (1 - cos(2 pi f_m T)) / (4 pi f_m) (small g): the most at f_m = (k + 1/2) / T, none at the
+drive's harmonics. The coupled start-up's slow beat (docs/coupling.md, "Periodic state") is
+such a motion.
+
+The velocities one period back are the structure's accepted window starts, recorded by the
+participant; until a period has been recorded there is no reference and no force.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from numpy.typing import NDArray
+
+from .shell import ShellModel
+
+
+class PeriodicFeedback:
+    """A damping part (``force``, ``linear`` like solvers.RayleighDamping) whose reference
+    velocity is set per step by the participant (``prepare``)."""
+
+    amplitude_dependent = False
+
+    def __init__(self, gain_per_s: float, steps_per_period: int) -> None:
+        if not (np.isfinite(gain_per_s) and gain_per_s >= 0):
+            raise ValueError(f"the feedback gain must be finite and >= 0, got {gain_per_s!r}")
+        if steps_per_period < 1:
+            raise ValueError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
+        self.gain = float(gain_per_s)
+        self.steps_per_period = int(steps_per_period)
+        self.reference: NDArray | None = None  # v(t_end - T) of the step being solved
+        self._history: dict[int, NDArray] = {}  # step index -> velocity at its start
+
+    def prepare(self, step: int, v_start: NDArray, start_orbit: NDArray | None = None) -> None:
+        """Before solving step ``step`` (from t_step to t_step+1): record the velocity at its
+        start (a repeated solve of the same step records the same state) and take the
+        reference for its end, one period back; in the first period, the velocity of the
+        periodic orbit the run started on (``start_orbit``, at the step's end), if any."""
+        self._history[step] = v_start.copy()
+        for old in [k for k in self._history if k < step - self.steps_per_period]:
+            del self._history[old]
+        self.reference = self._history.get(step + 1 - self.steps_per_period, start_orbit)
+
+    def history(self) -> tuple[NDArray, NDArray]:
+        """(step indices, velocities at their starts) recorded so far, for a checkpoint."""
+        steps = sorted(self._history)
+        if not steps:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 0))
+        return np.array(steps, dtype=np.int64), np.array([self._history[k] for k in steps])
+
+    def restore(self, steps: NDArray, velocities: NDArray) -> None:
+        """Take back a checkpoint's history(), so a resumed run feeds back as the original."""
+        self.forget()
+        pairs = zip(steps, velocities, strict=True)
+        self._history = {int(k): np.array(v, dtype=float) for k, v in pairs}
+
+    def forget(self) -> None:
+        """Drop the history (a resumed or restarted run records a period again)."""
+        self._history.clear()
+        self.reference = None
+
+    def force(self, model: ShellModel, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]:
+        if self.reference is None or self.gain == 0:
+            return np.zeros_like(v), sp.csr_matrix((v.size, v.size))
+        C = self.gain * model.inertia
+        return C @ (v - self.reference), C
+
+    def linear(self, model: ShellModel, orbit=None) -> sp.spmatrix:
+        """Zero: a periodic response does not feel it."""
+        return sp.csr_matrix((model.ndof, model.ndof))
