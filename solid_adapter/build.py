@@ -139,7 +139,9 @@ def periodic_feedback(case: Case) -> PeriodicFeedback | None:
     gain = case.time.periodic_feedback_per_s
     if not gain or not has_actuators(case):
         return None
-    return PeriodicFeedback(gain, case.time.steps_per_period)
+    steps = case.time.steps_per_period
+    ramp = round(case.actuation.ramp_periods * steps)
+    return PeriodicFeedback(gain, steps, first_step=ramp)
 
 
 def build_integrator(

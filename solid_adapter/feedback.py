@@ -11,10 +11,15 @@ drive's harmonics. The coupled start-up's slow beat (docs/coupling.md, "Periodic
 such a motion.
 
 The velocities one period back are the structure's accepted window starts, recorded by the
-participant; until a period has been recorded there is no reference and no force.
+participant. A run started on a periodic orbit takes the period before t = 0 from that orbit;
+a start from rest has no reference, and no force, until a period (after a ramp, a period past
+the ramp) has been recorded. A window retried in sub-steps (a failed Newton) uses the window
+end's reference in each of them.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,25 +34,37 @@ class PeriodicFeedback:
 
     amplitude_dependent = False
 
-    def __init__(self, gain_per_s: float, steps_per_period: int) -> None:
+    def __init__(self, gain_per_s: float, steps_per_period: int, first_step: int = 0) -> None:
+        """``first_step``: the earliest step a reference may come from (a ramped drive's ramp
+        is no period to come back to)."""
         if not (np.isfinite(gain_per_s) and gain_per_s >= 0):
             raise ValueError(f"the feedback gain must be finite and >= 0, got {gain_per_s!r}")
         if steps_per_period < 1:
             raise ValueError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
         self.gain = float(gain_per_s)
         self.steps_per_period = int(steps_per_period)
+        self.first_step = int(first_step)
         self.reference: NDArray | None = None  # v(t_end - T) of the step being solved
         self._history: dict[int, NDArray] = {}  # step index -> velocity at its start
 
-    def prepare(self, step: int, v_start: NDArray, start_orbit: NDArray | None = None) -> None:
+    def seed(self, velocity_at_step: Callable[[int], NDArray], first: int = 0) -> None:
+        """Take the period before step ``first`` from a periodic orbit (the run's start
+        orbit): step k -> the velocity at the start of step k, for the N - 1 steps before
+        ``first``. Kept in the checkpoint like recorded steps."""
+        self.forget()
+        for k in range(first + 1 - self.steps_per_period, first):
+            self._history[k] = np.array(velocity_at_step(k), dtype=float)
+
+    def prepare(self, step: int, v_start: NDArray) -> None:
         """Before solving step ``step`` (from t_step to t_step+1): record the velocity at its
         start (a repeated solve of the same step records the same state) and take the
-        reference for its end, one period back; in the first period, the velocity of the
-        periodic orbit the run started on (``start_orbit``, at the step's end), if any."""
+        reference for its end, one period back (None where none was recorded or seeded)."""
         self._history[step] = v_start.copy()
         for old in [k for k in self._history if k < step - self.steps_per_period]:
             del self._history[old]
-        self.reference = self._history.get(step + 1 - self.steps_per_period, start_orbit)
+        back = step + 1 - self.steps_per_period
+        in_ramp = 0 <= back < self.first_step
+        self.reference = None if in_ramp else self._history.get(back)
 
     def history(self) -> tuple[NDArray, NDArray]:
         """(step indices, velocities at their starts) recorded so far, for a checkpoint."""

@@ -69,6 +69,7 @@ class ShellParticipant:
         self.midline_nodes = on_axis[np.argsort(model.mesh.nodes[on_axis, 0])]
         self.orbit = orbit
         self.feedback = feedback
+        self._seed_feedback(t0)
         if orbit is not None:
             if x0 is not None or v0 is not None or a0 is not None:
                 raise ValueError("give either a start state (x0, v0, a0) or an orbit, not both")
@@ -83,12 +84,21 @@ class ShellParticipant:
     def restart(self, orbit: PeriodicResponse) -> None:
         """Start again at the initial time on another periodic orbit (a corrected one)."""
         self.orbit = orbit
+        self._seed_feedback(self.state.t)
         self.state = self.integrator.initial_state(
             self.state.t, self.external_load, self.volts, *orbit.at(self.state.t)
         )
         self._checkpoint, self._answer = None, None
-        if self.feedback is not None:
-            self.feedback.forget()
+
+    def _seed_feedback(self, t0: float) -> None:
+        """The feedback's period before t0 from the start orbit (none from rest)."""
+        feedback, orbit = self.feedback, self.orbit
+        if feedback is None:
+            return
+        feedback.forget()
+        if orbit is not None:
+            dt = 2 * np.pi / orbit.omega / feedback.steps_per_period
+            feedback.seed(lambda k: orbit.at(k * dt)[1], first=round(t0 / dt))
 
     def take_added_mass(self, preconditioning: AddedMassPreconditioning | None) -> None:
         """Carry the *-am schemes' preconditioning added mass: in the inertia, and taken by the
@@ -167,8 +177,7 @@ class ShellParticipant:
 
     def solve(self, dt: float) -> None:
         if self.feedback is not None:
-            orbit = None if self.orbit is None else self.orbit.at(self.state.t + dt)[1]
-            self.feedback.prepare(round(self.state.t / dt), self.state.v, orbit)
+            self.feedback.prepare(round(self.state.t / dt), self.state.v)
         self.state = self.integrator.step(
             self.state, dt, self.external_load, self.volts, guess=self._answer
         )

@@ -38,9 +38,9 @@ class _Model:
 
 
 def test_the_feedback_is_the_velocitys_change_over_a_period_times_g_m():
-    """Exact: no force until a period is recorded (or toward the start orbit's velocity, where
-    the run has one), then g M (v - v one period back); a step solved again (a coupling
-    iteration) records the same start; zero on a periodic motion."""
+    """Exact: no force until a period is recorded (or seeded from a start orbit), then
+    g M (v - v one period back); a step solved again (a coupling iteration) records the same
+    start; zero on a periodic motion; nothing referred to inside a ramp."""
     feedback, model = PeriodicFeedback(2.0, steps_per_period=3), _Model()
     history = [np.array([k, -k, 2.0 * k]) for k in range(8)]
     for step in range(2):
@@ -57,11 +57,21 @@ def test_the_feedback_is_the_velocitys_change_over_a_period_times_g_m():
     assert not feedback.linear(model).nnz  # a harmonic response does not feel it
     feedback.forget()
     assert not np.any(feedback.force(model, None, v)[0])
-    orbit = np.array([0.5, 0.0, -1.0])  # a start orbit's velocity stands in for the first period
-    feedback.prepare(0, history[0], start_orbit=orbit)
+    # a start orbit stands in for the period before step 0, and only for that period
+    orbit = {k: np.array([0.5, k, -1.0]) for k in (-2, -1)}
+    feedback.seed(orbit.__getitem__)
+    feedback.prepare(0, history[0])
     np.testing.assert_array_equal(
-        feedback.force(model, None, v)[0], 2.0 * model.inertia @ (v - orbit)
+        feedback.force(model, None, v)[0], 2.0 * model.inertia @ (v - orbit[-2])
     )
+    feedback.forget()
+    feedback.prepare(5, history[5])  # a history without the period back (an old checkpoint)
+    assert not np.any(feedback.force(model, None, v)[0])
+    # a ramp is no period to come back to
+    ramped = PeriodicFeedback(2.0, steps_per_period=3, first_step=3)
+    for step in range(6):
+        ramped.prepare(step, history[step])
+        assert (ramped.reference is None) == (step < 5)
 
 
 @pytest.mark.parametrize("gain", [-1.0, float("nan")])
@@ -96,12 +106,20 @@ def test_the_feedback_brings_a_start_from_rest_to_the_periodic_orbit(tmp_path, c
     assert amplitudes["feedback"][-1] == pytest.approx(orbit, rel=2e-3)
 
 
-def test_a_feedback_without_a_period_is_refused(tmp_path):
+@pytest.mark.parametrize(
+    "sets",
+    [
+        ["time.step_s=0.001", "time.end_time_s=0.01"],
+        ["analysis.integrator=energy-conserving"],
+    ],
+)
+def test_a_feedback_without_a_period_or_on_the_mid_step_velocity_is_refused(tmp_path, sets):
+    """No whole number of steps per period; the energy-conserving rule's mid-step velocity
+    (the feedback there would not vanish on a periodic motion)."""
     (tmp_path / "beam").mkdir()
     (tmp_path / "beam" / "case.toml").write_text(BEAM)
-    sets = ["time.step_s=0.001", "time.end_time_s=0.01", "time.periodic_feedback_per_s=5"]
     with pytest.raises(CaseError, match="time.periodic_feedback_per_s"):
-        load_case(tmp_path / "beam", sets)
+        load_case(tmp_path / "beam", [*sets, "time.periodic_feedback_per_s=5"])
 
 
 def test_a_resumed_run_feeds_back_as_the_uninterrupted_one(tmp_path, capsys):

@@ -9,7 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from .params import CaseError, build_section
-from .schema import MFC_VOLTAGE_RANGE_V, SECTIONS, Case, CouplingScheme, GeometryKind
+from .schema import (
+    MFC_VOLTAGE_RANGE_V,
+    SECTIONS,
+    Case,
+    CouplingScheme,
+    GeometryKind,
+    Integrator,
+)
 
 CASE_FILE = "case.toml"
 MAX_CASE_BYTES = 1_000_000  # a case file is a few kB; anything near this is not one
@@ -290,6 +297,12 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             "time.periodic_feedback_per_s feeds back the motion one drive period earlier; a run "
             "given by time.step_s / time.end_time_s has no whole number of steps per period: "
             "remove one or the other"
+        )
+    if t.periodic_feedback_per_s and case.analysis.integrator is Integrator.ENERGY_CONSERVING:
+        raise CaseError(
+            'time.periodic_feedback_per_s needs analysis.integrator = "generalized-alpha" or '
+            '"newmark": the energy-conserving rule damps with the mid-step velocity, against '
+            "which the feedback is not zero on a periodic motion"
         )
     c = case.coupling
     if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
