@@ -123,10 +123,14 @@ def main(argv: list[str] | None = None) -> int:
                     amplitude = " / ".join(
                         f"{a * 1e3:.2f}" for a in row["tip_amplitude_per_period_m"]
                     )
+                    ran = len(row["tip_amplitude_per_period_m"])
+                    two, one = (
+                        row[key] or f"not within {ran}"
+                        for key in ("periods_to_2_percent", "periods_to_1_percent")
+                    )
                     print(
                         f"{name}, G = {gain:g}: tail [mm] {amplitude}; periodic to 2 % after "
-                        f"{row['periods_to_2_percent']}, 1 % after "
-                        f"{row['periods_to_1_percent']} periods; {row['wall_s']:.0f} s",
+                        f"{two}, to 1 % after {one} periods; {row['wall_s']:.0f} s",
                         flush=True,
                     )
     if args.json:
