@@ -102,6 +102,7 @@ class Coupling:
             settings.lead_in_windows,
             settings.lead_in_omega,
             start_orbit,
+            periods=settings.lead_in_periods,
         )
         self.resumed_from_scheme: CouplingScheme | None = None  # a resumed run's former scheme
 
@@ -157,18 +158,48 @@ class Coupling:
                     sum(c * u for c, u in zip(stencil, levels, strict=False)) / dt**2
                 )
             solid.initialize_data(history)
-        self._start_from_fluid_force(solid)
+        self._seed_predictor(self._start_from_fluid_force(solid), motion, dt)
 
-    def _start_from_fluid_force(self, solid: Participant) -> None:
+    def _start_from_fluid_force(self, solid: Participant) -> NDArray[np.float64]:
         """The fluid's last force in this scheme's exchanged variable (f, or g = f + M~ a with
         the structure's present acceleration for an *-am scheme) becomes the structure's load
-        and the predictor's only value."""
+        and the predictor's only value; returned."""
         x = self.mapping.conservative(self.fluid.write_data()[FORCE])
         if self.added_mass_z is not None:
             x[:, 2] += self.added_mass_z @ solid.write_data()[ACCELERATION][:, 2]
         if isinstance(solid, InitializesData):
             solid.initialize_data({FORCE: x})
         self.predictor.restart(solid.time, {FIELD: x})
+        return x
+
+    def _seed_predictor(self, x0: NDArray[np.float64], motion: Motion, dt: float) -> None:
+        """A lead-in that ended on whole periods of the structure's orbit (a recorded start)
+        gives the predictor the period before t = 0 in the exchanged variable (x0 at t = 0),
+        so that window 0 already predicts one period back instead of holding the last force:
+        an explicit scheme's forcing then does not change its rule a period into the run,
+        which rang the coupled first mode (6 % in tail amplitude, coarse 3 Hz)."""
+        ends = self.start_up.last_period[:-1]  # the last one is t = 0's: x0
+        if not ends:
+            return
+        said = (
+            self.fluid.acceleration_stencil
+            if isinstance(self.fluid, HasAccelerationStencil)
+            else None
+        )
+        stencil = said if said is not None else (1.0, -2.0, 1.0)
+
+        def exchanged(t: float, force: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
+            x = force.copy()
+            if self.added_mass_z is not None:  # + M~ a, a as the fluid differentiates u
+                levels = [motion(t - k * dt) for k in range(len(stencil))]
+                a = np.sum([c * u for c, u in zip(stencil, levels, strict=True)], axis=0)
+                x[:, 2] += self.added_mass_z @ a[:, 2] / dt**2
+            return {FIELD: x}
+
+        self.predictor.restart(ends[0][0], exchanged(*ends[0]))
+        for t, force in ends[1:]:
+            self.predictor.record(t, exchanged(t, force))
+        self.predictor.record(0.0, {FIELD: x0})
 
     # ------------------------------------------------------------------ one window
     def solve_window(self, solid: Participant, dt: float, window: int) -> dict[str, float]:

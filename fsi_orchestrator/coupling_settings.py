@@ -218,6 +218,9 @@ class CouplingSettings:
     # many windows (see Coupling.lead_in).
     lead_in_windows: int = 0
     lead_in_omega: float = 0.0
+    # periods of that lead-in without a start correction (the first ramped up): a start on a
+    # recorded CFD orbit takes two, so that the flow at t = 0 is the periodic one
+    lead_in_periods: int = 1
 
     def __post_init__(self) -> None:
         tol = self.tolerance_rel
@@ -228,6 +231,7 @@ class CouplingSettings:
             ("lead_in_omega", self.lead_in_omega),
         ):
             _check(name, value, value >= 0, "at least 0")
+        _check("lead_in_periods", self.lead_in_periods, self.lead_in_periods >= 1, "at least 1")
 
     @property
     def scheme(self) -> CouplingScheme:

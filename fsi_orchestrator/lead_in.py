@@ -77,20 +77,28 @@ class LeadIn:
         windows: int,
         omega: float,
         start_orbit: StartOrbit | None = None,
+        periods: int = 1,
     ) -> None:
+        """``periods``: how many periods the fluid follows the orbit without a start orbit to
+        correct (the first ramped up; a start orbit takes two: fit and blend)."""
         self.fluid, self.mapping, self.clock = fluid, mapping, clock
-        self.windows, self.omega = windows, omega
+        self.windows, self.omega, self.periods = windows, omega, periods
         self.start_orbit = start_orbit if windows > 0 else None
         self.start_fit: ModalFit | None = None
         # the prescribed-motion windows (one fluid step each): the fluid's wall time per
         # window, the denominator of the coupled / prescribed-motion cost ratio
         self.prescribed_wall_s_per_window: float | None = None
         self.wall_s = 0.0  # all of it, fit included (window 0's wall time holds it)
+        # the last period and two windows of fluid forces (window end, structure's nodal
+        # force), where the lead-in ends on whole periods of the orbit: the predictor's
+        # history before t = 0 (its period rule looks a period back from the last two ends)
+        self.last_period: list[tuple[float, NDArray[np.float64]]] = []
 
     @property
     def fluid_windows(self) -> int:
-        """The lead-in's fluid windows: one period, two with a start orbit (the blend)."""
-        return self.windows if self.start_orbit is None else 2 * self.windows
+        """The lead-in's fluid windows: ``periods`` periods, two with a start orbit (the
+        blend)."""
+        return self.periods * self.windows if self.start_orbit is None else 2 * self.windows
 
     def run(self, solid: Participant, dt: float, arrive: Callable[[Motion], None]) -> None:
         """The lead-in (none without windows or frequency); ``arrive(motion)`` hands on the
@@ -108,7 +116,9 @@ class LeadIn:
         """The lead-in's periods of prescribed motion: how many, and the last one's motion."""
         n = self.windows
         old = periodic_motion(solid, self.omega)
-        times = [(k - n) * dt for k in range(1, n + 1)]  # one period, ending at t = 0
+        periods = self.periods if self.start_orbit is None else 1
+        # ``periods`` periods ending at t = 0, ramped up over the first half period
+        times = [(k - periods * n) * dt for k in range(1, periods * n + 1)]
         half = n * dt / 2
 
         def ramped(t: float) -> NDArray[np.float64]:
@@ -116,7 +126,7 @@ class LeadIn:
 
         if self.start_orbit is None:
             self.follow(ramped, times, dt)
-            return 1, ramped
+            return periods, ramped
         cap = self._fit(self.start_orbit, old, ramped, times, dt)
         new = periodic_motion(solid, self.omega)
 
@@ -168,6 +178,10 @@ class LeadIn:
             forces = self.clock.run(self.fluid.follow, moved, dt)
         else:
             forces = [self._prescribed_window(motion, t, dt) for t in times]
+        self.last_period = []
+        if self.periods >= 2 and self.start_orbit is None:  # the last period is on the orbit
+            ends = list(zip(times, forces, strict=True))[-self.windows - 2 :]
+            self.last_period = [(t, self.mapping.conservative(f)) for t, f in ends]
         if record_from is None:
             return None
         rows = [

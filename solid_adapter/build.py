@@ -27,6 +27,7 @@ from .harmonic import (
 from .mesh import build_mesh
 from .participant import ShellParticipant, StaticLoads
 from .piezo import DriveSignal
+from .recorded_orbit import OrbitRecorder, RecordedStart
 from .shell import NDOF, ShellModel
 from .solvers import (
     CombinedDamping,
@@ -157,7 +158,11 @@ def build_integrator(
     )
 
 
-def build_shell_participant(case: Case, model: ShellModel | None = None) -> ShellParticipant:
+def build_shell_participant(
+    case: Case, model: ShellModel | None = None, start: RecordedStart | None = None
+) -> ShellParticipant:
+    """The shell participant of a dynamic run: at rest, on the fast model's periodic orbit, or
+    (``start``, time.start_from) on the orbit an earlier run recorded, from its end state."""
     model = model or build_shell_model(case)
     loads = static_loads(case, model)
     feedback = periodic_feedback(case)
@@ -166,10 +171,27 @@ def build_shell_participant(case: Case, model: ShellModel | None = None) -> Shel
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)
     drive = DriveSignal.from_case(case)
     check_mean_voltage(model, drive.mean)
-    orbit = None
-    if case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
+    recorder = None
+    if case.time.step_s is None:  # a whole number of windows per period
+        recorder = OrbitRecorder(case.time.steps_per_period, 1 / case.actuation.frequency_hz)
+    orbit, x0, v0, a0 = None, None, None, None
+    if start is not None:
+        orbit, x0, v0, a0 = start.orbit, start.x0, start.v0, start.a0
+    elif case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:
         orbit = periodic_orbit(case, model, drive, loads, integrator)
-    return ShellParticipant(model, integrator, drive.volts, loads, orbit=orbit, feedback=feedback)
+    return ShellParticipant(
+        model,
+        integrator,
+        drive.volts,
+        loads,
+        x0=x0,
+        v0=v0,
+        a0=a0,
+        orbit=orbit,
+        feedback=feedback,
+        recorder=recorder,
+        exact_start=start is not None,
+    )
 
 
 # Fewest time steps per period of a harmonic that the periodic start holds. A square wave's

@@ -302,3 +302,18 @@ def linearized_damping_response(
         if abs(abs(response.harmonics[0][1][tip_dof]) - previous) <= 1e-4 * previous:
             break
     return response
+
+
+def periodic_response_from_samples(omega: float, samples: NDArray) -> PeriodicResponse:
+    """The trigonometric interpolant of one period of states sampled at N equal steps, sample j
+    at t = j T / N (T = 2 pi / omega): it passes through every sample and holds the harmonics
+    up to N / 2 (the Nyquist one as a cosine)."""
+    samples = np.asarray(samples, dtype=float)
+    n = len(samples)
+    c = np.fft.rfft(samples, axis=0) / n  # x_j = sum_k c_k e^(2 pi i j k / n), two-sided
+    harmonics = []
+    for k in range(1, n // 2 + 1):
+        nyquist = 2 * k == n
+        # 2 Re(c e^(i k w t)) = Im(2i c e^(i k w t)); at Nyquist c is real and counted once
+        harmonics.append((k, (1j if nyquist else 2j) * c[k]))
+    return PeriodicResponse(omega=omega, x_static=c[0].real.copy(), harmonics=harmonics)

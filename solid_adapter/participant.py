@@ -28,6 +28,7 @@ from fsi_orchestrator.participant import (
 
 from .feedback import PeriodicFeedback
 from .harmonic import PeriodicResponse
+from .recorded_orbit import OrbitRecorder
 from .shell import NDOF, ShellModel
 from .solvers import AddedMassAsForce, DynamicState, TimeIntegrator
 
@@ -55,9 +56,15 @@ class ShellParticipant:
         a0: NDArray | None = None,
         orbit: PeriodicResponse | None = None,
         feedback: PeriodicFeedback | None = None,
+        recorder: OrbitRecorder | None = None,
+        exact_start: bool = False,
     ) -> None:
-        """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0. ``feedback``:
-        the integrator's delayed feedback toward the periodic state, fed here."""
+        """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0 (its state there
+        unless (x0, v0, a0) is given too: a recorded orbit's exact end state). ``feedback``:
+        the integrator's delayed feedback toward the periodic state, fed here. ``recorder``
+        keeps the last period's displacements for the checkpoint (time.start_from);
+        ``exact_start``: (x0, v0, a0) is a state the integrator reached (another run's end), taken
+        as it is."""
         self.model = model
         self.volts = volts
         self.loads = loads
@@ -70,11 +77,14 @@ class ShellParticipant:
         self.orbit = orbit
         self.feedback = feedback
         self._seed_feedback(t0)
-        if orbit is not None:
+        self.recorder = recorder
+        if orbit is not None and (x0 is None or v0 is None or a0 is None):
             if x0 is not None or v0 is not None or a0 is not None:
-                raise ValueError("give either a start state (x0, v0, a0) or an orbit, not both")
+                raise ValueError("give the whole start state (x0, v0, a0) with an orbit, or none")
             x0, v0, a0 = orbit.at(t0)
-        self.state = self.integrator.initial_state(t0, self.external_load, volts, x0, v0, a0)
+        self.state = self.integrator.initial_state(
+            t0, self.external_load, volts, x0, v0, a0, relax=not exact_start
+        )
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
         # this window's last solution (a private copy): Newton's start when the window is solved
         # again after restore_checkpoint (2.5 Newton iterations instead of 4); without a restore
@@ -176,6 +186,8 @@ class ShellParticipant:
             self._pressure = np.asarray(data[PRESSURE], dtype=float).reshape(self.model.n_nodes)
 
     def solve(self, dt: float) -> None:
+        if self.recorder is not None:
+            self.recorder.record(self.state.t, self.state.x)
         if self.feedback is not None:
             self.feedback.prepare(round(self.state.t / dt), self.state.v)
         self.state = self.integrator.step(
@@ -225,8 +237,13 @@ class ShellParticipant:
                 "feedback_steps": steps,
                 "feedback_velocities": velocities.reshape(len(steps), self.model.ndof),
             }
+        recorded: dict[str, NDArray | float] = {}
+        if self.recorder is not None:
+            self.recorder.record(s.t, s.x)
+            recorded = self.recorder.state()
         return {
             **feedback,
+            **recorded,
             "t": s.t,
             "x": s.x.copy(),
             "v": s.v.copy(),
@@ -269,6 +286,8 @@ class ShellParticipant:
             steps = np.asarray(state.get("feedback_steps", np.zeros(0)), dtype=np.int64)
             velocities = np.asarray(state.get("feedback_velocities", np.zeros((0, 0))))
             self.feedback.restore(steps, velocities)  # none recorded: it records a period again
+        if self.recorder is not None:
+            self.recorder.restore(state)
 
     def finalize(self) -> None:
         pass

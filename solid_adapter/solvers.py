@@ -588,13 +588,21 @@ class TimeIntegrator:
         x0: NDArray | None = None,
         v0: NDArray | None = None,
         a0: NDArray | None = None,
+        relax: bool = True,
     ) -> DynamicState:
         """At rest in static equilibrium under the loads and voltages of t0 (the seed starts
         from zero; a voltage offset switched on at t = 0 would only add a start-up transient),
         unless x0 / v0 are given, with the acceleration from the equation of motion. With a0
         too (a linear periodic start), the fast DOFs of (x0, v0, a0) are first brought into
-        quasi-static balance with the normal displacements (see relax_fast_dofs)."""
+        quasi-static balance with the normal displacements (see relax_fast_dofs), unless
+        ``relax`` is False: (x0, v0, a0) is a state this integrator reached (time.start_from)."""
         m = self.model
+        if a0 is not None and not relax:
+            assert x0 is not None and v0 is not None
+            x, v = x0.copy(), v0.copy()
+            f_int = m.internal(x, volts(t0), tangent=False)[0]
+            f_ext = loads(t0, x, False)[0]
+            return DynamicState(t0, x, v, a0.copy(), f_int, f_ext, self._damping_force(x, v))
         if x0 is None:
 
             def load_fn(lam: float, x: NDArray, tangent: bool):

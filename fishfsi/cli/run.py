@@ -39,7 +39,9 @@ from .compose import (
     is_coupled,
     learned_jacobian_path,
     openfoam_fluid_factory,
+    recorded_start,
     shell_with_fast_fluid,
+    start_from_path,
 )
 from .linear import swimming_summary
 from .modal import modal_summary
@@ -255,7 +257,8 @@ def run_dynamic(
         )
         with progress.phase(f"set-up: structure{fluid}"):
             model, added = shell_with_fast_fluid(case)
-            solid, coupling = build_shell_participant(case, model), None
+            recorded = None if resume else recorded_start(case, model.ndof)
+            solid, coupling = build_shell_participant(case, model, recorded), None
     schedule = schedule_of(case)
     settings = OutputSettings(
         directory=output,
@@ -321,6 +324,8 @@ def run_dynamic(
     # call's after them: a resume of a finished run keeps the run's figure, not its seconds
     summary["wall_s"] += time.perf_counter() - windows_end
     summary["setup_s"] = start - set_up
+    if case.time.start_from:  # where the structure's orbit and start state came from
+        summary["start_from"] = str(start_from_path(case))
     if added is not None:  # the fast fluid's added mass is in the structure's equations
         summary.update(coupling_scheme="monolithic", mean_fluid_solves_per_window=1.0)
     if coupling is not None and coupling.resumed_from_scheme is not None:
@@ -400,6 +405,7 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
     learned = {}  # where the quasi-Newton's first Jacobian came from
     if case.coupling.jacobian_from:
         learned = {"jacobian_from": str(learned_jacobian_path(case))}
+
     timing = {}
     if fluid is not None and len(fluid) == len(wall):
         # the wall time outside the fluid's solves: the structure's and the coupling's

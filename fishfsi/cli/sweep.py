@@ -160,12 +160,15 @@ def transient_sweep(
     done: frozenset[str] | set[str] = frozenset(),
     resume: bool = False,
     on_row: OnRow | None = None,
+    start_from: Path | None = None,
 ) -> list[dict]:
     """One nonlinear run per (waveform, frequency) not ``done`` (point_name), in the stable
     folder ``output/<point name>``; each row is handed to ``on_row`` as it is finished. With
     ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
     the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
-    holds a checkpoint continues from it (fsi-run --resume)."""
+    holds a checkpoint continues from it (fsi-run --resume). ``start_from``: an earlier sweep's
+    folder, whose point of the same name (a finished run) each point starts on
+    (started_from)."""
     from fluid_adapter.openfoam.errors import MeshFoldedError
     from fsi_orchestrator.convergence import CouplingDivergenceError
     from fsi_orchestrator.loop import AFRESH, ResumeError
@@ -194,6 +197,8 @@ def transient_sweep(
         waveform, f = jobs[index]
         folder = output / point_name(waveform, f)
         point = with_drive(case, f, waveform)
+        if start_from is not None:
+            point = started_from(point, start_from / point_name(waveform, f))
         if learned is not None:
             point = chained(point, learned)
         start = time.perf_counter()
@@ -280,6 +285,22 @@ def transient_sweep(
 
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
+
+
+def started_from(case: Case, source: Path) -> Case:
+    """The point started on the orbit an earlier sweep's point of the same drive ended on
+    (time.start_from), where that point finished a run; else the point as it is, with a
+    note. The case's own time.start_from stays."""
+    from fsi_orchestrator.results import CHECKPOINT_FILE
+
+    if case.time.start_from:
+        return case
+    if not (source / CHECKPOINT_FILE).is_file():
+        print(f"note: {source} holds no finished run; the point starts as usual", file=sys.stderr)
+        return case
+    return dataclasses.replace(
+        case, time=dataclasses.replace(case.time, start_from=str(source.resolve()))
+    )
 
 
 def with_iterated_windows(case: Case) -> Case | None:
@@ -687,6 +708,11 @@ def _sweep(args: argparse.Namespace) -> int:
     if len(set(waveforms)) < len(waveforms):
         raise CaseError(f"--waveforms {args.waveforms!r}: a waveform is given twice")
     frequencies, waveforms = select_point(frequencies, waveforms, args.point)
+    start_from = Path(args.start_from) if args.start_from else None
+    if start_from is not None and args.method != "transient":
+        raise CaseError("--start-from starts transient runs: add --method transient")
+    if start_from is not None and not start_from.is_dir():
+        raise CaseError(f"--start-from {start_from}: no such sweep folder")
     output = output_folder(args.output, case.directory / "output" / "sweep")
     start = time.perf_counter()
     points = [point_name(w, f) for w in waveforms for f in frequencies]
@@ -764,6 +790,7 @@ def _sweep(args: argparse.Namespace) -> int:
             done=done,
             resume=args.resume,
             on_row=on_row,
+            start_from=start_from,
         )
         if rank != 0:  # rank 0 merges and prints, after the gather
             return EXIT_OK
@@ -802,6 +829,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         type=int,
         help="run only the K-th point (0-based, waveforms then frequencies): one SLURM array "
         "task's share (scripts/slurm_array.sh); the rows merge in --output",
+    )
+    parser.add_argument(
+        "--start-from",
+        metavar="SWEEP",
+        help="transient: start each point on the periodic orbit the same point of an earlier "
+        "sweep ended on (its folder, e.g. the coarse level's; time.start_from): fewer periods "
+        "to the periodic state. A point that sweep has no finished run for starts as usual",
     )
     earlier = parser.add_mutually_exclusive_group()
     earlier.add_argument(

@@ -16,6 +16,7 @@ from .schema import (
     CouplingScheme,
     GeometryKind,
     Integrator,
+    StartMode,
 )
 
 CASE_FILE = "case.toml"
@@ -304,6 +305,18 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             '"newmark": the energy-conserving rule damps with the mid-step velocity, against '
             "which the feedback is not zero on a periodic motion"
         )
+    if t.start_from:
+        if t.step_s is not None:
+            raise CaseError(
+                "time.start_from starts on a recorded period of the drive; a run given by "
+                "time.step_s / time.end_time_s has no whole number of steps per period: remove "
+                "one or the other"
+            )
+        if t.start is not StartMode.PERIODIC or case.actuation.ramp_periods > 0:
+            raise CaseError(
+                "time.start_from starts on a periodic orbit, not from rest: remove it, or set "
+                'time.start = "periodic" and actuation.ramp_periods = 0'
+            )
     c = case.coupling
     if c.jacobian_from and c.scheme is not CouplingScheme.IQN_ILS_AM:
         raise CaseError(

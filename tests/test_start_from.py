@@ -1,0 +1,215 @@
+"""time.start_from: a run starts on the periodic orbit an earlier run ended on, from its last
+state (solid_adapter/recorded_orbit.py)."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from fishfsi.cli import run as run_cli
+from fsi_orchestrator.case import CaseError, load_case
+from solid_adapter.harmonic import periodic_response_from_samples
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# the piezo beam of tests/test_periodic_feedback.py: lightly damped, so that a start from rest
+# rings its first mode for many periods
+BEAM = """
+[geometry]
+kind = "beam"
+[actuation]
+frequency_hz = 10.0
+[analysis]
+rayleigh_alpha_per_s = 3.0
+[time]
+periods = 6
+steps_per_period = 20
+[mesh]
+level = "coarse"
+[output]
+vtk = false
+"""
+
+
+@pytest.fixture
+def beam(tmp_path):
+    (tmp_path / "beam").mkdir()
+    (tmp_path / "beam" / "case.toml").write_text(BEAM)
+    return tmp_path / "beam"
+
+
+def _run(capsys, case, output, *sets: str) -> dict:
+    args = [str(case), "--json", "--quiet", "--output", str(output)]
+    for s in sets:
+        args += ["--set", s]
+    assert run_cli.main(args) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_the_interpolant_passes_through_the_samples_with_their_harmonics():
+    """Exact for a trigonometric polynomial of degree < N / 2 (the Nyquist term a cosine)."""
+    omega, n = 2 * np.pi * 3.0, 16
+    t = np.arange(n) / (3.0 * n)
+
+    def exact(s):
+        return np.array([0.1 + np.sin(omega * s) + 0.2 * np.cos(3 * omega * s + 0.3)])
+
+    samples = np.array([exact(s) for s in t]) + np.cos(np.pi * np.arange(n))[:, None] * 1e-3
+    orbit = periodic_response_from_samples(omega, samples)
+    for s, x in zip(t, samples, strict=True):
+        np.testing.assert_allclose(orbit.at(s)[0], x, rtol=0, atol=1e-14)
+    smooth = periodic_response_from_samples(omega, np.array([exact(s) for s in t]))
+    s = 0.0123
+    velocity = omega * np.cos(omega * s) - 0.6 * omega * np.sin(3 * omega * s + 0.3)
+    np.testing.assert_allclose(smooth.at(s)[0], exact(s), rtol=1e-12)
+    np.testing.assert_allclose(smooth.at(s)[1], [velocity], rtol=1e-12)
+
+
+def test_a_run_started_from_another_continues_it(beam, tmp_path, capsys):
+    """From rest the beam rings for periods (its amplitude 1-21 % from the periodic one). A run
+    started from a 6-period run's checkpoint goes on where it ended: its windows are the
+    12-period run's last 120 to the Newton tolerance, and it says where it started."""
+    full = _run(capsys, beam, tmp_path / "full", "time.start=rest", "time.periods=12")
+    _run(capsys, beam, tmp_path / "first", "time.start=rest")
+    second = _run(capsys, beam, tmp_path / "second", f"time.start_from={tmp_path / 'first'}")
+    assert second["start_from"] == str(tmp_path / "first" / "checkpoint.h5")
+    with h5py.File(full["results"]) as f, h5py.File(second["results"]) as g:
+        tail, tail_full = g["shell/tip_displacement_m"][:, 2], f["shell/tip_displacement_m"][:, 2]
+    assert len(tail) == 120
+    np.testing.assert_allclose(tail, tail_full[120:], rtol=0, atol=1e-9 * np.ptp(tail))
+    np.testing.assert_allclose(
+        second["tip_amplitude_per_period_m"], full["tip_amplitude_per_period_m"][6:], rtol=1e-8
+    )
+
+
+@pytest.mark.parametrize(
+    ("first", "then", "message"),
+    [
+        ([], ["actuation.frequency_hz=12"], "driven at 10 Hz, this case at 12 Hz"),
+        ([], ["mesh.level=default"], "shell meshes differ"),
+        (["time.periods=2.5"], [], "not at the end of a whole recorded period"),
+    ],
+)
+def test_a_start_that_does_not_fit_is_refused_in_one_line(
+    beam, tmp_path, capsys, first, then, message
+):
+    _run(capsys, beam, tmp_path / "first", *first)
+    args = [str(beam), "--quiet", "--output", str(tmp_path / "second")]
+    for s in [f"time.start_from={tmp_path / 'first'}", *then]:
+        args += ["--set", s]
+    assert run_cli.main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "time.start_from" in err[0] and message in err[0], err
+    assert not (tmp_path / "second" / "results.h5").exists()
+
+
+def test_a_missing_source_is_refused_in_one_line(beam, tmp_path, capsys):
+    args = [str(beam), "--quiet", "--set", f"time.start_from={tmp_path / 'none'}"]
+    assert run_cli.main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "time.start_from" in err[0] and "does not exist" in err[0], err
+
+
+@pytest.mark.parametrize(
+    "sets",
+    [
+        ["time.step_s=0.001", "time.end_time_s=0.01"],
+        ["time.start=rest"],
+        ["actuation.ramp_periods=1"],
+    ],
+)
+def test_a_start_from_without_a_period_or_from_rest_is_refused(beam, sets):
+    with pytest.raises(CaseError, match="time.start_from"):
+        load_case(beam, [*sets, "time.start_from=elsewhere"])
+
+
+class _PeriodicFluid:
+    """A fluid whose force is F0 sin(w t) on every node, wherever the plate is."""
+
+    name = "fluid"
+
+    def __init__(self, points, omega: float) -> None:
+        from fsi_orchestrator.participant import InterfaceMesh
+
+        self.mesh = InterfaceMesh(
+            points=points, cells=np.zeros((0, 4), dtype=int), cell_type="quad"
+        )
+        self.omega, self.time = omega, 0.0
+
+    def interface(self):
+        return self.mesh
+
+    def read_data(self, data) -> None:
+        pass
+
+    def solve(self, dt: float) -> None:
+        self.time += dt
+
+    def write_data(self):
+        from fsi_orchestrator.participant import FORCE
+
+        force = np.zeros((len(self.mesh.points), 3))
+        force[:, 2] = np.sin(self.omega * self.time)
+        return {FORCE: force}
+
+
+@pytest.mark.parametrize("periods", [1, 2])
+def test_a_lead_in_of_whole_periods_seeds_the_predictors_period_before_t0(periods):
+    """After a lead-in that ends on two whole periods of the orbit (a recorded start) window 0
+    predicts one period back: on a periodic fluid force its first iterate is exact. After the
+    one ramped period of a usual lead-in the predictor can only hold the last force."""
+    from fishfsi.cli.compose import coupled_setup
+    from fsi_orchestrator.coupling import FIELD, Coupling
+
+    case = load_case(
+        ROOT / "cases" / "fixed_head_3Hz",
+        ["fluid.model=potential", "coupling.partitioned=true", "time.periods=1"],
+    )
+    n, frequency = 40, case.actuation.frequency_hz
+    dt, omega = 1 / (frequency * n), 2 * np.pi * frequency
+    solid, coupling = coupled_setup(case)
+    settings = dataclasses.replace(
+        coupling.settings, lead_in_windows=n, lead_in_omega=omega, lead_in_periods=periods
+    )
+    points = solid.interface().points
+    fluid = _PeriodicFluid(points, omega)
+    fluid.time = -periods / frequency  # the lead-in ends at t = 0
+    coupling = Coupling(fluid, points, settings, None)  # plain scheme: x = the force
+    coupling.lead_in(solid, dt)
+    assert len(coupling.start_up.last_period) == (n + 2 if periods == 2 else 0)
+    predicted = coupling.predictor.predict(dt)[FIELD][:, 2]
+    exact = np.sin(omega * dt) * coupling.mapping.conservative(np.ones((len(points), 3)))[:, 2]
+    miss = np.abs(predicted - exact).max() / np.abs(exact).max()
+    if periods == 2:
+        assert coupling.predictor.rule == "period"
+        assert miss < 1e-9
+    else:
+        assert miss > 0.99  # sin(0): the last force
+
+
+def test_a_sweep_starts_each_point_from_the_same_point_of_another(beam, tmp_path, capsys):
+    """fsi-sweep --start-from: the 10 Hz point goes on from the earlier sweep's 10 Hz run (its
+    windows are a 12-period run's last 6), a point the earlier sweep lacks starts as usual
+    with a note, and a linear sweep is refused."""
+    from fishfsi.cli import sweep as sweep_cli
+
+    full = _run(capsys, beam, tmp_path / "full", "time.start=rest", "time.periods=12")
+    sweep = [str(beam), "--method", "transient", "--waveforms", "sine", "--quiet"]
+    first = [*sweep, "--set", "time.start=rest", "--frequencies", "10"]
+    assert sweep_cli.main([*first, "--output", str(tmp_path / "a")]) == 0
+    capsys.readouterr()
+    later = [*sweep, "--frequencies", "10,12", "--output", str(tmp_path / "b")]
+    assert sweep_cli.main([*later, "--start-from", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'a' / 'sine_12Hz'} holds no finished run" in err
+    with h5py.File(full["results"]) as f, h5py.File(tmp_path / "b/sine_10Hz/results.h5") as g:
+        tail, tail_full = g["shell/tip_displacement_m"][:, 2], f["shell/tip_displacement_m"][:, 2]
+    np.testing.assert_allclose(tail, tail_full[120:], rtol=0, atol=1e-9 * np.ptp(tail))
+    linear = [str(beam), "--frequencies", "10", "--output", str(tmp_path / "c")]
+    assert sweep_cli.main([*linear, "--start-from", str(tmp_path / "a")]) == 2
+    assert "--start-from" in capsys.readouterr().err
