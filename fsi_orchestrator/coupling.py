@@ -42,7 +42,7 @@ from .case.schema import CouplingScheme
 from .convergence import ConvergenceCriteria, ScaledRelativeMeasure, WindowStatus
 from .coupling_failure import FailureHandling
 from .coupling_settings import CouplingSettings as CouplingSettings  # re-exported
-from .lead_in import FluidClock, LeadIn, Motion
+from .lead_in import FluidClock, LeadIn, Motion, motion_acceleration
 from .mapping import InterfaceMapping
 from .participant import (
     ACCELERATION,
@@ -181,19 +181,22 @@ class Coupling:
         ends = self.start_up.last_period[:-1]  # the last one is t = 0's: x0
         if not ends:
             return
-        said = (
+        stencil = (
             self.fluid.acceleration_stencil
             if isinstance(self.fluid, HasAccelerationStencil)
             else None
         )
-        stencil = said if said is not None else (1.0, -2.0, 1.0)
 
         def exchanged(t: float, force: NDArray[np.float64]) -> dict[str, NDArray[np.float64]]:
             x = force.copy()
-            if self.added_mass_z is not None:  # + M~ a, a as the fluid differentiates u
+            if self.added_mass_z is None:
+                return {FIELD: x}
+            if stencil is None:  # the structure's own acceleration: the motion's
+                a = motion_acceleration(motion, t, dt)
+            else:  # as the fluid differentiates u (the structure's a_fluid at t = 0)
                 levels = [motion(t - k * dt) for k in range(len(stencil))]
-                a = np.sum([c * u for c, u in zip(stencil, levels, strict=True)], axis=0)
-                x[:, 2] += self.added_mass_z @ a[:, 2] / dt**2
+                a = np.sum([c * u for c, u in zip(stencil, levels, strict=True)], axis=0) / dt**2
+            x[:, 2] += self.added_mass_z @ a[:, 2]
             return {FIELD: x}
 
         self.predictor.restart(ends[0][0], exchanged(*ends[0]))

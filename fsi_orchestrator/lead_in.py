@@ -186,7 +186,7 @@ class LeadIn:
             return None
         rows = [
             (t, motion(t)[:, 2], _velocity(motion, t, dt)[:, 2])
-            + (_acceleration(motion, t, dt)[:, 2], self.mapping.conservative(f)[:, 2])
+            + (motion_acceleration(motion, t, dt)[:, 2], self.mapping.conservative(f)[:, 2])
             for t, f in zip(times, forces, strict=True)
             if t >= record_from - 1e-9 * dt
         ]
@@ -200,7 +200,7 @@ class LeadIn:
             {
                 DISPLACEMENT: self.mapping.consistent(motion(t)),
                 VELOCITY: self.mapping.consistent(_velocity(motion, t, dt)),
-                ACCELERATION: self.mapping.consistent(_acceleration(motion, t, dt)),
+                ACCELERATION: self.mapping.consistent(motion_acceleration(motion, t, dt)),
             }
         )
         self.clock.run(self.fluid.solve, dt)
@@ -245,7 +245,7 @@ def _velocity(motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
     return rate
 
 
-def _acceleration(motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
+def motion_acceleration(motion: Motion, t: float, dt: float) -> NDArray[np.float64]:
     h = 1e-4 * dt
     rate: NDArray[np.float64] = (motion(t + h) - 2 * motion(t) + motion(t - h)) / h**2
     return rate

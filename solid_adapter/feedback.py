@@ -49,11 +49,14 @@ class PeriodicFeedback:
 
     def seed(self, velocity_at_step: Callable[[int], NDArray], first: int = 0) -> None:
         """Take the period before step ``first`` from a periodic orbit (the run's start
-        orbit): step k -> the velocity at the start of step k, for the N - 1 steps before
-        ``first``. Kept in the checkpoint like recorded steps."""
+        orbit): step k -> the velocity at the start of step k, for the N steps before
+        ``first``. Kept in the checkpoint like recorded steps. The reference is then the one
+        for the start state, one period before ``first`` (its damping force)."""
         self.forget()
-        for k in range(first + 1 - self.steps_per_period, first):
+        for k in range(first - self.steps_per_period, first):
             self._history[k] = np.array(velocity_at_step(k), dtype=float)
+        in_ramp = 0 <= first - self.steps_per_period < self.first_step
+        self.reference = None if in_ramp else self._history[first - self.steps_per_period]
 
     def prepare(self, step: int, v_start: NDArray) -> None:
         """Before solving step ``step`` (from t_step to t_step+1): record the velocity at its

@@ -28,7 +28,7 @@ from fsi_orchestrator.participant import (
 
 from .feedback import PeriodicFeedback
 from .harmonic import PeriodicResponse
-from .recorded_orbit import OrbitRecorder
+from .recorded_orbit import OrbitRecorder, RecordedOrbit
 from .shell import NDOF, ShellModel
 from .solvers import AddedMassAsForce, DynamicState, TimeIntegrator
 
@@ -106,7 +106,12 @@ class ShellParticipant:
         if feedback is None:
             return
         feedback.forget()
-        if orbit is not None:
+        if isinstance(orbit, RecordedOrbit) and len(orbit.step_velocities) == (
+            feedback.steps_per_period
+        ):  # the velocities the source run fed back on
+            dt = 2 * np.pi / orbit.omega / feedback.steps_per_period
+            feedback.seed(orbit.velocity_at_step, first=round(t0 / dt))
+        elif orbit is not None:
             dt = 2 * np.pi / orbit.omega / feedback.steps_per_period
             feedback.seed(lambda k: orbit.at(k * dt)[1], first=round(t0 / dt))
 
@@ -187,7 +192,7 @@ class ShellParticipant:
 
     def solve(self, dt: float) -> None:
         if self.recorder is not None:
-            self.recorder.record(self.state.t, self.state.x)
+            self.recorder.record(self.state.t, self.state.x, self.state.v)
         if self.feedback is not None:
             self.feedback.prepare(round(self.state.t / dt), self.state.v)
         self.state = self.integrator.step(
@@ -239,7 +244,7 @@ class ShellParticipant:
             }
         recorded: dict[str, NDArray | float] = {}
         if self.recorder is not None:
-            self.recorder.record(s.t, s.x)
+            self.recorder.record(s.t, s.x, s.v)
             recorded = self.recorder.state()
         return {
             **feedback,

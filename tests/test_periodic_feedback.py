@@ -58,7 +58,7 @@ def test_the_feedback_is_the_velocitys_change_over_a_period_times_g_m():
     feedback.forget()
     assert not np.any(feedback.force(model, None, v)[0])
     # a start orbit stands in for the period before step 0, and only for that period
-    orbit = {k: np.array([0.5, k, -1.0]) for k in (-2, -1)}
+    orbit = {k: np.array([0.5, k, -1.0]) for k in (-3, -2, -1)}
     feedback.seed(orbit.__getitem__)
     feedback.prepare(0, history[0])
     np.testing.assert_array_equal(

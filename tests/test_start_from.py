@@ -70,18 +70,30 @@ def test_the_interpolant_passes_through_the_samples_with_their_harmonics():
     np.testing.assert_allclose(smooth.at(s)[1], [velocity], rtol=1e-12)
 
 
-def test_a_run_started_from_another_continues_it(beam, tmp_path, capsys):
+@pytest.mark.parametrize("gain", [0, 10])
+def test_a_run_started_from_another_continues_it(beam, tmp_path, capsys, gain):
     """From rest the beam rings for periods (its amplitude 1-21 % from the periodic one). A run
     started from a 6-period run's checkpoint goes on where it ended: its windows are the
-    12-period run's last 120 to the Newton tolerance, and it says where it started."""
-    full = _run(capsys, beam, tmp_path / "full", "time.start=rest", "time.periods=12")
-    _run(capsys, beam, tmp_path / "first", "time.start=rest")
-    second = _run(capsys, beam, tmp_path / "second", f"time.start_from={tmp_path / 'first'}")
+    12-period run's last 120 to the Newton tolerance, also with the delayed feedback, whose
+    period before t = 0 is the recorded one (a sample shifted by a window breaks it). Resumed
+    after 3 periods it is the same run, and it says where it started."""
+    feedback = f"time.periodic_feedback_per_s={gain}"
+    full = _run(capsys, beam, tmp_path / "full", "time.start=rest", "time.periods=12", feedback)
+    _run(capsys, beam, tmp_path / "first", "time.start=rest", feedback)
+    start = f"time.start_from={tmp_path / 'first'}"
+    second = _run(capsys, beam, tmp_path / "second", start, feedback)
     assert second["start_from"] == str(tmp_path / "first" / "checkpoint.h5")
+    _run(capsys, beam, tmp_path / "part", start, feedback, "time.periods=3")
+    args = [str(beam), "--json", "--quiet", "--output", str(tmp_path / "part"), "--resume"]
+    assert run_cli.main([*args, "--set", start, "--set", feedback]) == 0
+    resumed = json.loads(capsys.readouterr().out)
     with h5py.File(full["results"]) as f, h5py.File(second["results"]) as g:
         tail, tail_full = g["shell/tip_displacement_m"][:, 2], f["shell/tip_displacement_m"][:, 2]
+    with h5py.File(resumed["results"]) as r:
+        tail_resumed = r["shell/tip_displacement_m"][:, 2]
     assert len(tail) == 120
     np.testing.assert_allclose(tail, tail_full[120:], rtol=0, atol=1e-9 * np.ptp(tail))
+    np.testing.assert_allclose(tail_resumed, tail, rtol=0, atol=1e-12)
     np.testing.assert_allclose(
         second["tip_amplitude_per_period_m"], full["tip_amplitude_per_period_m"][6:], rtol=1e-8
     )
@@ -133,6 +145,8 @@ class _PeriodicFluid:
 
     name = "fluid"
 
+    acceleration_stencil = (1.0, -2.0, 1.0)  # a = (u_n+1 - 2 u_n + u_n-1) / dt^2
+
     def __init__(self, points, omega: float) -> None:
         from fsi_orchestrator.participant import InterfaceMesh
 
@@ -158,11 +172,13 @@ class _PeriodicFluid:
         return {FORCE: force}
 
 
-@pytest.mark.parametrize("periods", [1, 2])
-def test_a_lead_in_of_whole_periods_seeds_the_predictors_period_before_t0(periods):
+@pytest.mark.parametrize(("periods", "added_mass"), [(1, False), (2, False), (2, True)])
+def test_a_lead_in_of_whole_periods_seeds_the_predictors_period_before_t0(periods, added_mass):
     """After a lead-in that ends on two whole periods of the orbit (a recorded start) window 0
-    predicts one period back: on a periodic fluid force its first iterate is exact. After the
-    one ramped period of a usual lead-in the predictor can only hold the last force."""
+    predicts one period back: on a periodic fluid force its first iterate is exact, also in an
+    *-am scheme's variable g = f + M~ a (a as the fluid's stencil differentiates the motion).
+    After the one ramped period of a usual lead-in the predictor can only hold the last
+    force."""
     from fishfsi.cli.compose import coupled_setup
     from fsi_orchestrator.coupling import FIELD, Coupling
 
@@ -179,11 +195,17 @@ def test_a_lead_in_of_whole_periods_seeds_the_predictors_period_before_t0(period
     points = solid.interface().points
     fluid = _PeriodicFluid(points, omega)
     fluid.time = -periods / frequency  # the lead-in ends at t = 0
-    coupling = Coupling(fluid, points, settings, None)  # plain scheme: x = the force
+    m_tilde = 0.01 * np.eye(len(points)) if added_mass else None  # None: x = the force
+    coupling = Coupling(fluid, points, settings, m_tilde)
     coupling.lead_in(solid, dt)
     assert len(coupling.start_up.last_period) == (n + 2 if periods == 2 else 0)
     predicted = coupling.predictor.predict(dt)[FIELD][:, 2]
     exact = np.sin(omega * dt) * coupling.mapping.conservative(np.ones((len(points), 3)))[:, 2]
+    if m_tilde is not None:
+        motion = solid.orbit_motion()
+        assert motion is not None
+        u = [motion(dt - k * dt)[:, 2] for k in range(3)]
+        exact = exact + m_tilde @ (u[0] - 2 * u[1] + u[2]) / dt**2
     miss = np.abs(predicted - exact).max() / np.abs(exact).max()
     if periods == 2:
         assert coupling.predictor.rule == "period"
@@ -213,3 +235,66 @@ def test_a_sweep_starts_each_point_from_the_same_point_of_another(beam, tmp_path
     linear = [str(beam), "--frequencies", "10", "--output", str(tmp_path / "c")]
     assert sweep_cli.main([*linear, "--start-from", str(tmp_path / "a")]) == 2
     assert "--start-from" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("sets", "message"),
+    [
+        (["time.start=rest"], "--start-from"),
+        (["time.start_from=elsewhere"], "time.start_from names one run"),
+    ],
+)
+def test_a_sweep_whose_points_cannot_start_on_an_orbit_is_refused(
+    beam, tmp_path, capsys, sets, message
+):
+    from fishfsi.cli import sweep as sweep_cli
+
+    (tmp_path / "a").mkdir()
+    args = [str(beam), "--method", "transient", "--frequencies", "10", "--waveforms", "sine"]
+    args += ["--output", str(tmp_path / "b"), "--start-from", str(tmp_path / "a")]
+    for s in sets:
+        args += ["--set", s]
+    assert sweep_cli.main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+
+
+def test_a_sweep_point_whose_source_ended_mid_period_starts_as_usual(beam, tmp_path, capsys):
+    """A killed or short earlier point is not a start: a note names it, and the point runs as
+    it would without --start-from."""
+    from fishfsi.cli import sweep as sweep_cli
+
+    sweep = [str(beam), "--method", "transient", "--waveforms", "sine", "--frequencies", "10"]
+    sweep += ["--quiet", "--json"]
+    short = [*sweep, "--output", str(tmp_path / "a"), "--set", "time.periods=2.5"]
+    assert sweep_cli.main(short) == 0
+    capsys.readouterr()
+    assert (
+        sweep_cli.main(
+            [*sweep, "--output", str(tmp_path / "b"), "--start-from", str(tmp_path / "a")]
+        )
+        == 0
+    )
+    captured = capsys.readouterr()
+    assert "not at the end of a whole recorded period" in captured.err
+    assert "the point starts as usual" in captured.err
+    assert sweep_cli.main([*sweep, "--output", str(tmp_path / "c")]) == 0
+    plain = json.loads(capsys.readouterr().out)["rows"][0]
+    started = json.loads(captured.out)["rows"][0]
+    assert started["tip_amplitude_m"] == pytest.approx(plain["tip_amplitude_m"], rel=1e-12)
+
+
+def test_a_recorded_start_leads_in_two_periods_without_the_start_correction():
+    """The OpenFOAM driver is sized for the lead-in's fluid windows: two uncorrected periods
+    on a recorded orbit, as with the start correction's fit and blend; one without either."""
+    from fishfsi.cli.compose import corrects_start, coupling_settings, lead_in_fluid_windows
+
+    base: list[str] = []  # the case's OpenFOAM at 40 windows per period
+    usual = load_case(ROOT / "cases" / "fixed_head_3Hz", base)
+    recorded = load_case(ROOT / "cases" / "fixed_head_3Hz", [*base, "time.start_from=x"])
+    plain = load_case(ROOT / "cases" / "fixed_head_3Hz", [*base, "coupling.start_correction=false"])
+    assert corrects_start(usual) and not corrects_start(recorded)
+    assert lead_in_fluid_windows(usual) == lead_in_fluid_windows(recorded) == 80
+    assert lead_in_fluid_windows(plain) == 40
+    assert coupling_settings(recorded).lead_in_periods == 2
+    assert coupling_settings(usual).lead_in_periods == 1

@@ -93,8 +93,8 @@ def coupling_settings(case: Case):
 
 
 def lead_in(case: Case) -> dict:
-    """One period of fluid-only lead-in when a CFD fluid meets a structure that starts on its
-    periodic orbit (Coupling.lead_in)."""
+    """A fluid-only lead-in when a CFD fluid meets a structure that starts on its periodic
+    orbit (Coupling.lead_in): one period, two on a recorded orbit (time.start_from)."""
     from fsi_orchestrator.case.schema import StartMode
     from fsi_orchestrator.case.timing import windows_per_period
 
@@ -124,7 +124,7 @@ def corrects_start(case: Case) -> bool:
 
 
 def lead_in_fluid_windows(case: Case) -> int:
-    """Fluid solves before window 0: one lead-in period, two with the start correction."""
+    """Fluid solves before window 0: the lead-in's periods, two with the start correction."""
     settings = lead_in(case)
     n = settings.get("lead_in_windows", 0)
     return 2 * n if corrects_start(case) else n * settings.get("lead_in_periods", 1)
@@ -283,7 +283,9 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
     estimate = added_mass_for_preconditioning(case, model)
     model.set_added_mass(estimate.matrix)  # for the periodic start
     solid = build_shell_participant(case, model, recorded)
-    case, start_note = choose_start(case, solid)
+    start_note = None
+    if not case.time.start_from:  # a recorded orbit is one the CFD has followed
+        case, start_note = choose_start(case, solid)
     if start_note is not None:
         solid = build_shell_participant(case, model)
     settings = coupling_settings(case)

@@ -189,6 +189,10 @@ def transient_sweep(
             return run_dynamic(point, folder, resume=False, show_progress=False)
 
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
+    if start_from is not None:  # the shell the earlier sweep's runs must have
+        from solid_adapter.build import build_shell_model
+
+        ndof = build_shell_model(case).ndof
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     mine = []
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
@@ -198,7 +202,7 @@ def transient_sweep(
         folder = output / point_name(waveform, f)
         point = with_drive(case, f, waveform)
         if start_from is not None:
-            point = started_from(point, start_from / point_name(waveform, f))
+            point = started_from(point, start_from / point_name(waveform, f), ndof)
         if learned is not None:
             point = chained(point, learned)
         start = time.perf_counter()
@@ -287,20 +291,32 @@ def transient_sweep(
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
 
 
-def started_from(case: Case, source: Path) -> Case:
+def started_from(case: Case, source: Path, ndof: int) -> Case:
     """The point started on the orbit an earlier sweep's point of the same drive ended on
-    (time.start_from), where that point finished a run; else the point as it is, with a
-    note. The case's own time.start_from stays."""
-    from fsi_orchestrator.results import CHECKPOINT_FILE
+    (time.start_from), where that sweep finished the point (its row ok) with a run that can
+    start this one (a shell of ``ndof`` unknowns, whole periods); else the point as it is,
+    with a note saying why."""
+    from .compose import recorded_start
 
-    if case.time.start_from:
-        return case
-    if not (source / CHECKPOINT_FILE).is_file():
-        print(f"note: {source} holds no finished run; the point starts as usual", file=sys.stderr)
-        return case
-    return dataclasses.replace(
-        case, time=dataclasses.replace(case.time, start_from=str(source.resolve()))
-    )
+    row = source.parent / ROWS_FOLDER / f"{source.name}.json"
+    why = None
+    try:
+        status = json.loads(row.read_text())["row"].get("status", "")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):  # none, or not a row
+        status = ""
+    if not status.startswith("ok"):
+        why = "holds no finished run"
+    else:
+        candidate = dataclasses.replace(
+            case, time=dataclasses.replace(case.time, start_from=str(source.resolve()))
+        )
+        try:
+            recorded_start(candidate, ndof)
+            return candidate
+        except CaseError as err:
+            why = f"cannot start it ({str(err).removeprefix('time.start_from: ')})"
+    print(f"note: {source} {why}; the point starts as usual", file=sys.stderr)
+    return case
 
 
 def with_iterated_windows(case: Case) -> Case | None:
@@ -340,6 +356,24 @@ def chained(case: Case, previous: Path) -> Case:
         return case
     coupling = dataclasses.replace(c, jacobian_from=str(previous.resolve()))
     return dataclasses.replace(case, coupling=coupling)
+
+
+def check_start_from(case: Case, folder: Path, method: str) -> None:
+    """--start-from's one-line refusals: another method, no folder, a case whose points
+    cannot start on an orbit (the loader's checks of time.start_from)."""
+    from fsi_orchestrator.case.schema import StartMode
+
+    where = f"--start-from {folder}"
+    if method != "transient":
+        raise CaseError(f"{where} starts transient runs: add --method transient")
+    if not folder.is_dir():
+        raise CaseError(f"{where}: no such sweep folder")
+    t = case.time
+    if t.step_s is not None or t.start is not StartMode.PERIODIC or case.actuation.ramp_periods:
+        raise CaseError(
+            f"{where} starts each point on a periodic orbit of whole periods: remove "
+            "time.step_s, time.start = rest or actuation.ramp_periods"
+        )
 
 
 def launcher_tasks() -> tuple[str, int] | None:
@@ -709,10 +743,13 @@ def _sweep(args: argparse.Namespace) -> int:
         raise CaseError(f"--waveforms {args.waveforms!r}: a waveform is given twice")
     frequencies, waveforms = select_point(frequencies, waveforms, args.point)
     start_from = Path(args.start_from) if args.start_from else None
-    if start_from is not None and args.method != "transient":
-        raise CaseError("--start-from starts transient runs: add --method transient")
-    if start_from is not None and not start_from.is_dir():
-        raise CaseError(f"--start-from {start_from}: no such sweep folder")
+    if start_from is not None:
+        check_start_from(case, start_from, args.method)
+    if case.time.start_from and args.method == "transient":
+        raise CaseError(
+            "time.start_from names one run, at one frequency; a sweep starts each point from "
+            "the same point of an earlier sweep with --start-from SWEEP: remove the key"
+        )
     output = output_folder(args.output, case.directory / "output" / "sweep")
     start = time.perf_counter()
     points = [point_name(w, f) for w in waveforms for f in frequencies]

@@ -306,6 +306,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             "which the feedback is not zero on a periodic motion"
         )
     if t.start_from:
+        if case.geometry.kind is GeometryKind.RECTANGLE:
+            raise CaseError(
+                'time.start_from starts on a driven orbit; geometry.kind = "rectangle" has no '
+                "actuators: remove it"
+            )
         if t.step_s is not None:
             raise CaseError(
                 "time.start_from starts on a recorded period of the drive; a run given by "

@@ -568,7 +568,7 @@ class Time:
         "",
         "dynamic with actuation: start on the periodic orbit an earlier run ended on (its "
         "output folder or checkpoint.h5; relative paths from the case folder), from its last "
-        "state, instead of the fast model's orbit; a CFD lead-in follows it for one period, "
+        "state, instead of the fast model's orbit; a CFD lead-in follows it for two periods, "
         "without the start correction. It needs the same shell mesh and frequency and a run of "
         "whole periods; the fluid's mesh level or model may differ: a default-level run from "
         "the coarse level's periodic state (docs/coupling.md).",
