@@ -174,7 +174,8 @@ def build_shell_participant(
     recorder = None
     if case.time.step_s is None:  # a whole number of windows per period
         recorder = OrbitRecorder(case.time.steps_per_period, 1 / case.actuation.frequency_hz)
-    orbit, x0, v0, a0 = None, None, None, None
+    orbit: PeriodicResponse | None = None
+    x0 = v0 = a0 = None
     if start is not None:
         orbit, x0, v0, a0 = start.orbit, start.x0, start.v0, start.a0
     elif case.time.start is StartMode.PERIODIC and case.actuation.ramp_periods == 0:

@@ -298,3 +298,12 @@ def test_a_recorded_start_leads_in_two_periods_without_the_start_correction():
     assert lead_in_fluid_windows(plain) == 40
     assert coupling_settings(recorded).lead_in_periods == 2
     assert coupling_settings(usual).lead_in_periods == 1
+
+
+def test_a_start_from_without_actuators_is_refused(make_case):
+    from tests.conftest import rectangle
+
+    sections = rectangle()
+    sections["time"] = {"start_from": "elsewhere"}
+    with pytest.raises(CaseError, match="time.start_from.*no actuators"):
+        make_case(**sections)
