@@ -130,34 +130,52 @@ def lead_in_fluid_windows(case: Case) -> int:
     return 2 * n if corrects_start(case) else n * settings.get("lead_in_periods", 1)
 
 
-def start_from_path(case: Case):
-    """The checkpoint time.start_from names (a run's output folder or the file)."""
+def checkpoint_named(case: Case, named: str):
+    """The checkpoint a key names: an earlier run's output folder or the file (relative paths
+    from the case folder)."""
     from fsi_orchestrator.results import CHECKPOINT_FILE
 
-    path = case.directory / case.time.start_from
+    path = case.directory / named
     return path / CHECKPOINT_FILE if path.is_dir() else path
+
+
+def from_earlier_checkpoint(case: Case, key: str, named: str, pick, what: str):
+    """``pick(loop state, participants' states)`` of the checkpoint ``key`` names, or one
+    CaseError naming the key: no such file, or not a checkpoint holding ``what``."""
+    from fsi_orchestrator.case import CaseError
+    from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
+
+    path = checkpoint_named(case, named)
+    where = f"{key}: {path}"
+    if not path.is_file():
+        raise CaseError(
+            f"{where} does not exist (give an earlier run's output folder or its {CHECKPOINT_FILE})"
+        )
+    try:
+        loop, participants, _ = read_checkpoint(path)
+        return pick(loop, participants)
+    except (OSError, KeyError, ValueError, RuntimeError):  # ValueError: checksum, NaN
+        raise CaseError(f"{where} holds no {what} checkpoint, or a damaged one") from None
+
+
+def start_from_path(case: Case):
+    """The checkpoint time.start_from names."""
+    return checkpoint_named(case, case.time.start_from)
 
 
 def recorded_start(case: Case, ndof: int):
     """time.start_from: the orbit and end state that run recorded (None without the key),
     checked against this case's frequency and a shell of ``ndof`` unknowns."""
     from fsi_orchestrator.case import CaseError
-    from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
     from solid_adapter.recorded_orbit import StartFromError
     from solid_adapter.recorded_orbit import recorded_start as start_on
 
     if not case.time.start_from:
         return None
     path = start_from_path(case)
-    where = f"time.start_from: {path}"
-    if not path.is_file():
-        raise CaseError(
-            f"{where} does not exist (give an earlier run's output folder or its {CHECKPOINT_FILE})"
-        )
-    try:
-        shell = read_checkpoint(path)[1]["shell"]
-    except (OSError, KeyError, ValueError, RuntimeError):  # ValueError: checksum, NaN
-        raise CaseError(f"{where} holds no shell's checkpoint, or a damaged one") from None
+    shell = from_earlier_checkpoint(
+        case, "time.start_from", case.time.start_from, lambda _, p: p["shell"], "shell's"
+    )
     try:
         return start_on(path, shell, case.actuation.frequency_hz, ndof)
     except StartFromError as exc:
@@ -325,28 +343,23 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
 
 def learned_jacobian_path(case: Case):
     """The checkpoint coupling.jacobian_from names (a run's output folder or the file)."""
-    from fsi_orchestrator.results import CHECKPOINT_FILE
 
-    path = case.directory / case.coupling.jacobian_from
-    return path / CHECKPOINT_FILE if path.is_dir() else path
+    return checkpoint_named(case, case.coupling.jacobian_from)
 
 
 def learned_jacobian(case: Case, n_nodes: int) -> dict:
     """coupling.jacobian_from: the quasi-Newton state saved in that checkpoint (a run's
     output folder or the file), checked against a shell of ``n_nodes`` interface nodes."""
     from fsi_orchestrator.case import CaseError
-    from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
 
-    path = learned_jacobian_path(case)
-    where = f"coupling.jacobian_from: {path}"
-    if not path.is_file():
-        raise CaseError(
-            f"{where} does not exist (give an earlier run's output folder or its {CHECKPOINT_FILE})"
-        )
-    try:
-        state = read_checkpoint(path)[0]["coupling"]["accelerator"]
-    except (OSError, KeyError, ValueError, RuntimeError):  # ValueError: checksum, NaN
-        raise CaseError(f"{where} holds no coupled run's checkpoint, or a damaged one") from None
+    where = f"coupling.jacobian_from: {learned_jacobian_path(case)}"
+    state = from_earlier_checkpoint(
+        case,
+        "coupling.jacobian_from",
+        case.coupling.jacobian_from,
+        lambda loop, _: loop["coupling"]["accelerator"],
+        "coupled run's",
+    )
     if "imvj_jacobian" not in state:
         raise CaseError(
             f'{where} holds no quasi-Newton Jacobian (that run\'s scheme was not "iqn-ils-am")'
