@@ -62,7 +62,7 @@ class ShellParticipant:
         """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0 (its state there
         unless (x0, v0, a0) is given too: a recorded orbit's exact end state). ``feedback``:
         the integrator's delayed feedback toward the periodic state, fed here. ``recorder``
-        keeps the last period's displacements for the checkpoint (time.start_from);
+        keeps the last period's states for the checkpoint (time.start_from);
         ``exact_start``: (x0, v0, a0) is a state the integrator reached (another run's end), taken
         as it is."""
         self.model = model

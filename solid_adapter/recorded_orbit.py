@@ -1,12 +1,12 @@
 """The last period of a run's motion, kept to start another run on it (``time.start_from``).
 
 A run that has reached its periodic state knows its orbit better than any fast model: the
-coarse CFD's 3 Hz orbit is within 0.4 % of the default level's in tail amplitude, where the
-fast model's start is 10 % off and the coupled start-up then beats for periods. The shell keeps
-its displacements at the last N window ends (N windows per period) and writes them to the
-checkpoint. A run started from it takes the source's end state (exact) at t = 0, and the
-trigonometric interpolant of that period as its orbit: what a CFD lead-in follows and what
-the delayed feedback takes as the period before t = 0.
+coarse CFD's 3 Hz orbit is within 1 % of the default level's answer in tail amplitude, where a
+coupled run from the fast model's start swings by 3-8 % for periods (docs/coupling.md). The
+shell keeps its displacements and velocities at the last N + 1 window ends (N windows per
+period) and writes them to the checkpoint. A run started from it takes the source's end state
+(exact) at t = 0 and the trigonometric interpolant of that period as its orbit, which a CFD
+lead-in follows; the delayed feedback's period before t = 0 is the recorded velocities.
 """
 
 from __future__ import annotations
