@@ -42,7 +42,14 @@ from .case.schema import CouplingScheme
 from .convergence import ConvergenceCriteria, ScaledRelativeMeasure, WindowStatus
 from .coupling_failure import FailureHandling
 from .coupling_settings import CouplingSettings as CouplingSettings  # re-exported
-from .lead_in import FluidClock, LeadIn, Motion, motion_acceleration
+from .lead_in import (
+    START_UP_WINDOWS,
+    FluidClock,
+    LeadIn,
+    Motion,
+    bridge_start_up,
+    motion_acceleration,
+)
 from .mapping import InterfaceMapping
 from .participant import (
     ACCELERATION,
@@ -103,6 +110,7 @@ class Coupling:
             settings.lead_in_omega,
             start_orbit,
             periods=settings.lead_in_periods,
+            displaced=settings.lead_in_displaced,
         )
         self.resumed_from_scheme: CouplingScheme | None = None  # a resumed run's former scheme
 
@@ -199,9 +207,13 @@ class Coupling:
             x[:, 2] += self.added_mass_z @ a[:, 2]
             return {FIELD: x}
 
-        self.predictor.restart(ends[0][0], exchanged(*ends[0]))
-        for t, force in ends[1:]:
-            self.predictor.record(t, exchanged(t, force))
+        seed = [(t, exchanged(t, force)) for t, force in ends]
+        if self.start_up.displaced:  # its start-up, and accelerations across t = -T
+            reach = len(stencil) - 1 if stencil is not None else 1
+            seed = bridge_start_up(seed, max(START_UP_WINDOWS, reach))
+        self.predictor.restart(*seed[0])
+        for t, values in seed[1:]:
+            self.predictor.record(t, values)
         self.predictor.record(0.0, {FIELD: x0})
 
     # ------------------------------------------------------------------ one window

@@ -221,6 +221,9 @@ class CouplingSettings:
     # periods of that lead-in without a start correction (the first ramped up): a start on a
     # recorded CFD orbit takes two, so that the flow at t = 0 is the periodic one
     lead_in_periods: int = 1
+    # the fluid starts displaced on the orbit, with the flow of the run that recorded it: the
+    # lead-in is one period, not ramped (enough to seed the predictor)
+    lead_in_displaced: bool = False
 
     def __post_init__(self) -> None:
         tol = self.tolerance_rel

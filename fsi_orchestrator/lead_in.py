@@ -9,6 +9,10 @@ developed flow. With a ``start_orbit`` the fluid's force over the second half co
 structure's orbit (fsi_orchestrator.start_orbit), and a second period blends the motion from
 the old orbit into the new one. Prescribed motion: the structure is not advanced and its time
 is untouched.
+
+A fluid that starts displaced (StartsDisplaced, on a recorded orbit: time.start_from) is put
+where the run that recorded the orbit ended, with that run's flow, and follows the orbit
+unramped for one period: the predictor's period before t = 0.
 """
 
 from __future__ import annotations
@@ -31,7 +35,9 @@ from .participant import (
     FollowsMotion,
     OnPeriodicOrbit,
     Participant,
+    StartsDisplaced,
 )
+from .predictors import lagrange_weights
 from .start_orbit import (
     MIN_SHAPE_ALIGNMENT,
     LeadInSamples,
@@ -47,6 +53,10 @@ LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-i
 # undamped fast orbit moved the fin at 3.5 m/s and blew the coarse CFD up within the first
 # period; 2.5 m/s (18 Hz, square) ran (docs/coupling.md)
 LEAD_IN_MAX_SPEED_M_S = 2.0
+# windows a CFD started displaced, from a mapped flow, is off its force before it repeats the
+# source's last period (coarse fish, 3 Hz: within 0.1 % of the swing from window 4 on at 40
+# windows per period, 2 % in window 4 and 0.3 % from window 5 on at 20)
+START_UP_WINDOWS = 4
 
 
 class FluidClock:
@@ -78,12 +88,17 @@ class LeadIn:
         omega: float,
         start_orbit: StartOrbit | None = None,
         periods: int = 1,
+        displaced: bool = False,
     ) -> None:
         """``periods``: how many periods the fluid follows the orbit without a start orbit to
-        correct (the first ramped up; a start orbit takes two: fit and blend)."""
+        correct (the first ramped up; a start orbit takes two: fit and blend). ``displaced``:
+        the fluid starts on the orbit instead (the module's docstring)."""
         self.fluid, self.mapping, self.clock = fluid, mapping, clock
         self.windows, self.omega, self.periods = windows, omega, periods
         self.start_orbit = start_orbit if windows > 0 else None
+        if displaced and (self.start_orbit is not None or not isinstance(fluid, StartsDisplaced)):
+            raise ValueError("a displaced lead-in needs a StartsDisplaced fluid, no start orbit")
+        self.displaced = displaced
         self.start_fit: ModalFit | None = None
         # the prescribed-motion windows (one fluid step each): the fluid's wall time per
         # window, the denominator of the coupled / prescribed-motion cost ratio
@@ -97,7 +112,9 @@ class LeadIn:
     @property
     def fluid_windows(self) -> int:
         """The lead-in's fluid windows: ``periods`` periods, two with a start orbit (the
-        blend)."""
+        blend); displaced, one."""
+        if self.displaced:
+            return self.windows
         return self.periods * self.windows if self.start_orbit is None else 2 * self.windows
 
     def run(self, solid: Participant, dt: float, arrive: Callable[[Motion], None]) -> None:
@@ -107,15 +124,21 @@ class LeadIn:
         if n <= 0 or self.omega <= 0:
             return
         start = time.perf_counter()
-        periods, motion = self._periods(solid, dt)
+        motion = self._periods(solid, dt)
         arrive(motion)
         self.wall_s = time.perf_counter() - start
-        self.prescribed_wall_s_per_window = self.clock.wall_s / (periods * n)
+        self.prescribed_wall_s_per_window = self.clock.wall_s / self.fluid_windows
 
-    def _periods(self, solid: Participant, dt: float) -> tuple[int, Motion]:
-        """The lead-in's periods of prescribed motion: how many, and the last one's motion."""
+    def _periods(self, solid: Participant, dt: float) -> Motion:
+        """The lead-in's periods of prescribed motion; returns the last one's motion."""
         n = self.windows
         old = periodic_motion(solid, self.omega)
+        if self.displaced:  # one period from t = -T, where the fluid starts on the orbit
+            times = [(k - n) * dt for k in range(1, n + 1)]
+            assert isinstance(self.fluid, StartsDisplaced)  # __init__ checks
+            self.fluid.start_displaced(self.mapping.consistent(old(-n * dt)))
+            self.follow(old, times, dt)
+            return old
         periods = self.periods if self.start_orbit is None else 1
         # ``periods`` periods ending at t = 0, ramped up over the first half period
         times = [(k - periods * n) * dt for k in range(1, periods * n + 1)]
@@ -126,7 +149,7 @@ class LeadIn:
 
         if self.start_orbit is None:
             self.follow(ramped, times, dt)
-            return periods, ramped
+            return ramped
         cap = self._fit(self.start_orbit, old, ramped, times, dt)
         new = periodic_motion(solid, self.omega)
 
@@ -135,7 +158,7 @@ class LeadIn:
             return (1 - r) * cap * old(t) + r * new(t)
 
         self.follow(blended, times, dt)
-        return 2, blended
+        return blended
 
     def _fit(
         self, orbit: StartOrbit, old: Motion, ramped: Motion, times: list[float], dt: float
@@ -179,8 +202,10 @@ class LeadIn:
         else:
             forces = [self._prescribed_window(motion, t, dt) for t in times]
         self.last_period = []
-        if self.periods >= 2 and self.start_orbit is None:  # the last period is on the orbit
+        if (self.periods >= 2 or self.displaced) and self.start_orbit is None:  # on the orbit
             ends = list(zip(times, forces, strict=True))[-self.windows - 2 :]
+            if self.displaced:  # one period: the two ends before it by periodicity
+                ends = [(t - self.windows * dt, f) for t, f in ends[-2:]] + ends
             self.last_period = [(t, self.mapping.conservative(f)) for t, f in ends]
         if record_from is None:
             return None
@@ -214,6 +239,29 @@ def peak_speed(motion: Motion, times: list[float]) -> float:
         float(np.max(np.abs(b - a))) / (tb - ta)
         for (ta, a), (tb, b) in pairwise(zip(times, path, strict=True))
     )
+
+
+def bridge_start_up(
+    ends: list[tuple[float, dict[str, NDArray[np.float64]]]], count: int
+) -> list[tuple[float, dict[str, NDArray[np.float64]]]]:
+    """A displaced lead-in's period (LeadIn.last_period, the two ends before it first) with its
+    first ``count`` windows replaced by cubic interpolation in time from the two ends on either
+    side. A CFD started from a mapped flow zig-zags about its force in its first windows
+    (START_UP_WINDOWS, flow_start.py), and an acceleration differentiated across t = -T
+    differentiates the recorded orbit's closure (its last period does not repeat exactly); the
+    predictor's period rule would hand either on to the coupled windows a period later."""
+    first, last = 2, 2 + count
+    known = [*ends[:first], *ends[last : last + 2]]
+    times = [t for t, _ in known]
+    bridged = []
+    for t, _ in ends[first:last]:
+        weights = lagrange_weights(times, t)
+        values = {
+            name: sum(w * v[name] for w, (_, v) in zip(weights, known, strict=True))
+            for name in known[0][1]
+        }
+        bridged.append((t, values))
+    return [*ends[:first], *bridged, *ends[last:]]
 
 
 def smoothstep(s: float) -> float:

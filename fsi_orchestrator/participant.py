@@ -144,6 +144,14 @@ class FollowsMotion(Protocol):
 
 
 @runtime_checkable
+class StartsDisplaced(Protocol):
+    """A fluid that can start with its interface displaced (and its flow as it was given it)
+    instead of flat and at rest."""
+
+    def start_displaced(self, displacement: NDArray[np.float64]) -> None: ...
+
+
+@runtime_checkable
 class OnPeriodicOrbit(Protocol):
     """A structure started on a periodic orbit: its interface motion u(t) with all harmonics
     (None: not on one)."""

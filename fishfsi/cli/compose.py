@@ -5,7 +5,9 @@ that `--help` and case errors stay fast)."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -108,6 +110,7 @@ def lead_in(case: Case) -> dict:
         "lead_in_windows": windows_per_period(case),
         "lead_in_omega": 2 * math.pi * case.actuation.frequency_hz,
         "lead_in_periods": RECORDED_LEAD_IN_PERIODS if case.time.start_from else 1,
+        "lead_in_displaced": carried_flow(case) is not None,
     }
 
 
@@ -127,7 +130,59 @@ def lead_in_fluid_windows(case: Case) -> int:
     """Fluid solves before window 0: the lead-in's periods, two with the start correction."""
     settings = lead_in(case)
     n = settings.get("lead_in_windows", 0)
+    if settings.get("lead_in_displaced"):
+        return n
     return 2 * n if corrects_start(case) else n * settings.get("lead_in_periods", 1)
+
+
+OPENFOAM_FOLDER = "openfoam"  # a run's OpenFOAM case, in its output folder
+
+
+def start_flow(case: Case):
+    """time.start_from's flow: the earlier run's OpenFOAM case at the time its checkpoint
+    ended (fluid_adapter.openfoam.flow_start.FlowSource) where both runs are serial OpenFOAM
+    runs in the same tank, else why not (str); None: no OpenFOAM run started from another."""
+    if not case.time.start_from or case.fluid.model is not FluidModel.OPENFOAM:
+        return None
+    if case.fluid.processes != 1:
+        return "fluid.processes > 1 (the flow is carried between serial runs only)"
+    path = start_from_path(case)
+    try:
+        stamp = path.stat().st_mtime_ns
+    except OSError:
+        return f"{path} does not exist"
+    return _flow_at(str(path), stamp, case)
+
+
+def _flow_at(path: str, stamp: int, case: Case):
+    """start_flow of the checkpoint ``path`` (its reading cached per file version)."""
+    from fluid_adapter.openfoam.fishmesh import tank_geometry
+    from fluid_adapter.openfoam.flow_start import flow_source
+
+    t = _fluid_end(path, stamp)
+    if t is None:
+        return f"{path} is no OpenFOAM run's checkpoint"
+    return flow_source(Path(path).parent / OPENFOAM_FOLDER, t, tank_geometry(case))
+
+
+@functools.lru_cache(maxsize=8)
+def _fluid_end(path: str, stamp: int) -> float | None:
+    """The fluid's time at the end of the checkpoint ``path`` (None: it has no CFD)."""
+    from fsi_orchestrator.results import read_checkpoint
+
+    try:
+        loop, _, _ = read_checkpoint(Path(path))
+        return float(loop["coupling"]["fluid"]["t"])
+    except (OSError, KeyError, ValueError, RuntimeError):
+        return None
+
+
+def carried_flow(case: Case):
+    """The FlowSource start_flow finds, or None."""
+    from fluid_adapter.openfoam.flow_start import FlowSource
+
+    found = start_flow(case)
+    return found if isinstance(found, FlowSource) else None
 
 
 def checkpoint_named(case: Case, named: str):
@@ -389,7 +444,11 @@ def openfoam_fluid_factory(workdir, *, fresh: bool):
         _, n_windows = case_schedule(case)
         n_windows += lead_in_fluid_windows(case)
         return build_openfoam_participant(
-            case, workdir, n_windows=n_windows, mesh_scale=case.fluid.mesh_scale
+            case,
+            workdir,
+            n_windows=n_windows,
+            mesh_scale=case.fluid.mesh_scale,
+            flow_from=carried_flow(case) if fresh else None,
         )
 
     return factory

@@ -18,6 +18,7 @@ from . import runner
 from .checkmesh import MeshQuality, parse
 from .drivers import PersistentDriver, RelaunchDriver
 from .fishmesh import FISH_PATCHES, TankGeometry, tank_geometry
+from .flow_start import FlowSource
 from .foamio import write_dict
 from .foamrun import FoamRun
 from .interface import FluidInterface, read_interface
@@ -82,11 +83,13 @@ def build_openfoam_participant(
     driver: FluidDriver | None = None,
     processes: int | None = None,
     reuse: bool = True,
+    flow_from: FlowSource | None = None,
 ) -> OpenFoamParticipant:
     """The fish-tank fluid of ``case`` in ``workdir`` (created, or reused when it was generated
     from the same geometry/fluid settings, so a killed run can resume from its time folders).
     ``dt``/``n_windows`` default to the case's schedule; ``mesh_scale`` multiplies every cell
-    size of ``fluid.mesh_level`` (tests use > 1 for small meshes)."""
+    size of ``fluid.mesh_level`` (tests use > 1 for small meshes). ``flow_from``: an earlier
+    run's flow, mapped on where the coupling starts the fluid displaced (flow_start.py)."""
     case_dt, case_n = case_schedule(case)
     dt, n_windows = dt or case_dt, n_windows or case_n
     processes = processes or case.fluid.processes
@@ -115,7 +118,12 @@ def build_openfoam_participant(
     else:
         chosen = RelaunchDriver(run, dt, prelaunch=_prelaunch(case, processes))
     participant = OpenFoamParticipant(
-        run, chosen, dt=dt, n_windows=n_windows, flow_surfaces=flow_surfaces(case, interface)
+        run,
+        chosen,
+        dt=dt,
+        n_windows=n_windows,
+        flow_surfaces=flow_surfaces(case, interface),
+        flow_from=flow_from,
     )
     participant.mesh_quality = quality
     return participant

@@ -22,6 +22,7 @@ from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, Sta
 from .checkmesh import MeshQuality, folded_mesh
 from .drivers import PersistentDriver, RelaunchDriver
 from .errors import DivergenceError, DriverError, MeshFoldedError
+from .flow_start import FlowSource, place
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
 from .slices import Surface, sample_slices
@@ -46,8 +47,11 @@ class OpenFoamParticipant:
         dt: float,
         n_windows: int,
         flow_surfaces: tuple[Surface, ...] = (),
+        flow_from: FlowSource | None = None,
     ) -> None:
+        """``flow_from``: an earlier run's flow to start from (start_displaced)."""
         self.run, self.driver = run, driver
+        self.flow_from = flow_from
         self.flow_surfaces = flow_surfaces
         self.dt, self.n_windows = dt, n_windows
         n = len(run.interface.points0)
@@ -127,6 +131,17 @@ class OpenFoamParticipant:
                 f"{self.run.path}: {folded}; its flow is wrong, so the run stops here. A "
                 "smaller drive or a stiffer design keeps the mesh whole"
             )
+
+    def start_displaced(self, displacement: NDArray) -> None:
+        """Before the first window (optional in the protocol; the lead-in on a recorded
+        orbit): the plate at ``displacement`` (interface points), the mesh moved with it, and
+        the flow of ``flow_from`` mapped on (flow_start.py)."""
+        u = np.asarray(displacement, dtype=float)
+        if u.shape != self.run.interface.points0.shape or self.time != 0.0:
+            raise DriverError("start_displaced needs a fresh case and interface displacements")
+        place(self.run, u, self.dt, self.flow_from)
+        self.driver.displacement = u.copy()
+        self._displacement = u.copy()
 
     def follow(self, displacements: Sequence[NDArray], dt: float) -> list[NDArray]:
         """Prescribed motion (optional in the protocol; the coupling's lead-in): the next

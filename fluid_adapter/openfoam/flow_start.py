@@ -1,0 +1,106 @@
+"""A CFD that starts displaced, with the flow of an earlier run (``time.start_from``).
+
+A run started on another run's periodic orbit starts its structure in that run's last state.
+Its liquid would start at rest around a flat plate and need periods of prescribed motion to
+build the flow up (docs/coupling.md). Instead the mesh is moved to the structure's start shape
+(``moveDynamicMesh``, no flow), and the earlier run's flow at its last time folder is mapped
+onto it (``mapFields -consistent``: the same tank at any mesh level). Both become time 0. The
+mesh motion integrates the plate's velocity, so a mesh that followed the plate for periods lies
+a little off the one moved there at once (docs/coupling.md).
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import runner
+from .casefiles import MOTION_FIELD
+from .errors import DriverError
+from .fishmesh import TankGeometry
+from .foamio import read_points
+from .foamrun import FoamRun, numeric_dirs
+
+# fields of the mesh motion: this run's own (cellMotionU is a volume field mapFields would map)
+MOTION_FIELDS = frozenset({MOTION_FIELD, "cellMotionU"})
+# steps of the mesh's move to the start (one would do: the motion solver is linear in the
+# plate's velocity; a few keep each step's cells near their last shape)
+RAMP_WINDOWS = 4
+
+
+@dataclass(frozen=True)
+class FlowSource:
+    """An earlier run's OpenFOAM case and the time folder its checkpoint ended at."""
+
+    case: Path
+    time_name: str
+
+
+def flow_source(case: Path, t: float, tank: TankGeometry) -> FlowSource | str:
+    """The serial OpenFOAM case folder ``case`` at time ``t`` in ``tank``, or why it cannot
+    be one."""
+    if not (case / "system" / "controlDict").is_file():
+        return f"{case} holds no OpenFOAM case"
+    if any(case.glob("processor[0-9]*")):
+        return f"{case} is decomposed (the flow is carried between serial runs only)"
+    points = read_points(case / "constant" / "polyMesh" / "points")
+    half = np.array([0.0, tank.depth / 2, tank.width / 2])
+    walls = np.array([[tank.x_front, 0, 0] - half, [tank.x_back, 0, 0] + half])
+    if not np.allclose([points.min(axis=0), points.max(axis=0)], walls, rtol=0, atol=1e-6):
+        return f"{case} is another tank"
+    found = [(abs(value - t), name) for value, name in numeric_dirs(case)]
+    near = min(found, default=(np.inf, ""))
+    if near[0] > 1e-6 * max(1.0, abs(t)) or not (case / near[1] / "U").is_file():
+        return f"{case} has no time folder at t = {t:.12g} s, where its checkpoint ended"
+    return FlowSource(case, near[1])
+
+
+def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource | None = None) -> None:
+    """Time 0 of ``run`` (a fresh serial case) with its plate at ``displacement`` (interface
+    points) and the mesh moved with it; with ``source``, that run's flow mapped on. pimpleFoam
+    starts from it with a first-order time step: its first windows' forces zig-zag about the
+    source's (coarse fish, 3 Hz: 0.00 / 0.71 / 0.37 N against 0.24 / 0.36 / 0.47 N) and agree
+    within 0.1 % of the force's swing from the fourth window on (fsi_orchestrator.lead_in)."""
+    if run.processes != 1:
+        raise DriverError(f"{run.path}: only a serial case starts displaced")
+    zero = run.path / "0"
+    run.remove_samples(dt)
+    run.write_start(0.0, dt)
+    for k in range(RAMP_WINDOWS):
+        run.write_window(k * dt, (k + 1) * dt, displacement / (RAMP_WINDOWS * dt))
+    end = RAMP_WINDOWS * dt
+    run.reset_body_bc("0")
+    run.set_window("0", end, dt, write_every=RAMP_WINDOWS)
+    run.set_controls(adjustTimeStep=False)
+    runner.utility("moveDynamicMesh", run.path, "-noFunctionObjects")
+    moved = run.path / run.time_folder(end, dt)
+    (zero / "polyMesh").mkdir(exist_ok=True)
+    shutil.copyfile(moved / "polyMesh" / "points", zero / "polyMesh" / "points")
+    run.remove_times({"0"})
+    run.remove_samples(dt)
+    run.write_start(0.0, dt)  # the samples of a fresh case
+    if source is not None:
+        _map_flow(run, source)
+
+
+def _map_flow(run: FoamRun, source: FlowSource) -> None:
+    """The source's flow fields onto time 0 (on its moved mesh): only the fields time 0 already
+    has, less the mesh motion's; mapFields writes every field it finds (old times too)."""
+    zero = run.path / "0"
+    before = {p.name for p in zero.iterdir() if p.is_file()}
+    with tempfile.TemporaryDirectory(dir=run.path) as keep:
+        for name in before & MOTION_FIELDS:
+            shutil.copy2(zero / name, Path(keep) / name)
+        runner.utility(
+            "mapFields", run.path, str(source.case), "-sourceTime", source.time_name, "-consistent"
+        )
+        for path in zero.iterdir():
+            if path.is_file() and path.name not in before:
+                path.unlink()
+        for name in before & MOTION_FIELDS:
+            shutil.copy2(Path(keep) / name, zero / name)
