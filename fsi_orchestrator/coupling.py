@@ -43,7 +43,6 @@ from .convergence import ConvergenceCriteria, ScaledRelativeMeasure, WindowStatu
 from .coupling_failure import FailureHandling
 from .coupling_settings import CouplingSettings as CouplingSettings  # re-exported
 from .lead_in import (
-    START_UP_WINDOWS,
     FluidClock,
     LeadIn,
     Motion,
@@ -58,6 +57,7 @@ from .participant import (
     HasAccelerationStencil,
     InitializesData,
     Participant,
+    StartsDisplaced,
 )
 from .predictors import EXPLICIT_RULES, PERIODIC_RULES, Predictor
 from .start_orbit import ModalFit, StartOrbit
@@ -208,9 +208,10 @@ class Coupling:
             return {FIELD: x}
 
         seed = [(t, exchanged(t, force)) for t, force in ends]
-        if self.start_up.displaced:  # its start-up, and accelerations across t = -T
+        if isinstance(self.fluid, StartsDisplaced) and self.start_up.displaced:
+            # its start-up, and accelerations across t = -T
             reach = len(stencil) - 1 if stencil is not None else 1
-            seed = bridge_start_up(seed, max(START_UP_WINDOWS, reach))
+            seed = bridge_start_up(seed, max(self.fluid.start_up_windows, reach))
         self.predictor.restart(*seed[0])
         for t, values in seed[1:]:
             self.predictor.record(t, values)

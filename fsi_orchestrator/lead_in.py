@@ -53,10 +53,8 @@ LEAD_IN_MAX_AMPLITUDE_M = 0.04  # largest interface motion of the fitting lead-i
 # undamped fast orbit moved the fin at 3.5 m/s and blew the coarse CFD up within the first
 # period; 2.5 m/s (18 Hz, square) ran (docs/coupling.md)
 LEAD_IN_MAX_SPEED_M_S = 2.0
-# windows a CFD started displaced, from a mapped flow, is off its force before it repeats the
-# source's last period (coarse fish, 3 Hz: within 0.1 % of the swing from window 4 on at 40
-# windows per period, 2 % in window 4 and 0.3 % from window 5 on at 20)
-START_UP_WINDOWS = 4
+# a displaced lead-in's period is seeded with the two window ends before it, by periodicity
+ENDS_BEFORE = 2
 
 
 class FluidClock:
@@ -204,8 +202,9 @@ class LeadIn:
         self.last_period = []
         if (self.periods >= 2 or self.displaced) and self.start_orbit is None:  # on the orbit
             ends = list(zip(times, forces, strict=True))[-self.windows - 2 :]
-            if self.displaced:  # one period: the two ends before it by periodicity
-                ends = [(t - self.windows * dt, f) for t, f in ends[-2:]] + ends
+            if self.displaced:  # one period: the ends before it by periodicity
+                before = ends[-ENDS_BEFORE:]
+                ends = [(t - self.windows * dt, f) for t, f in before] + ends
             self.last_period = [(t, self.mapping.conservative(f)) for t, f in ends]
         if record_from is None:
             return None
@@ -247,10 +246,12 @@ def bridge_start_up(
     """A displaced lead-in's period (LeadIn.last_period, the two ends before it first) with its
     first ``count`` windows replaced by cubic interpolation in time from the two ends on either
     side. A CFD started from a mapped flow zig-zags about its force in its first windows
-    (START_UP_WINDOWS, flow_start.py), and an acceleration differentiated across t = -T
+    (StartsDisplaced.start_up_windows), and an acceleration differentiated across t = -T
     differentiates the recorded orbit's closure (its last period does not repeat exactly); the
     predictor's period rule would hand either on to the coupled windows a period later."""
-    first, last = 2, 2 + count
+    first, last = ENDS_BEFORE, ENDS_BEFORE + count
+    if len(ends) < last + 2:
+        raise ValueError(f"a period of {len(ends)} window ends cannot bridge {count} windows")
     known = [*ends[:first], *ends[last : last + 2]]
     times = [t for t, _ in known]
     bridged = []

@@ -145,8 +145,11 @@ class FollowsMotion(Protocol):
 
 @runtime_checkable
 class StartsDisplaced(Protocol):
-    """A fluid that can start with its interface displaced (and its flow as it was given it)
-    instead of flat and at rest."""
+    """A fluid that can start with its interface displaced and a flow it was given, instead of
+    flat and at rest; its forces in the first ``start_up_windows`` windows are off."""
+
+    @property
+    def start_up_windows(self) -> int: ...
 
     def start_displaced(self, displacement: NDArray[np.float64]) -> None: ...
 

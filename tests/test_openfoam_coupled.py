@@ -367,8 +367,7 @@ def test_a_run_started_from_another_openfoam_run_starts_with_its_flow(world_sear
     past: measured within 0.3 % of the force's swing from window 5 on here (20 windows per
     period), 0.1 % from window 4 on the coarse mesh at 40. A lead-in from rest is still 11 %
     off the lateral force after one period (docs/coupling.md)."""
-    from fishfsi.cli.compose import lead_in as lead_in_settings
-    from fishfsi.cli.compose import start_flow
+    from fishfsi.cli.compose import decide_start_flow
     from fluid_adapter.openfoam.fishmesh import FISH_PATCHES
     from fluid_adapter.openfoam.foamio import read_points
     from fluid_adapter.openfoam.interface import read_interface
@@ -408,10 +407,17 @@ def test_a_run_started_from_another_openfoam_run_starts_with_its_flow(world_sear
     swing = np.ptp(last)
     assert np.abs(lead_in[4:] - last[4:]).max() < 0.01 * swing
     assert np.abs(lead_in[:3] - last[:3]).min() > 0.1 * swing  # the mapped flow's start-up
-    # another tank, or a decomposed run, builds its flow up from rest, and says why
+    # a resume keeps what the start did; another tank, a decomposed run or a start from the
+    # run's own folder (a fresh start replaces it) builds its flow up from rest, and says why
+    again = load_case(case, [*SMALL, f"time.start_from={source}"])
+    assert decide_start_flow(again, started, resume=True) == decide_start_flow(
+        again, world_searchable / "next", resume=False
+    )
+    assert "own folder" in decide_start_flow(again, source, resume=False)
     for change, why in (
         ("fluid.tank_length_m=0.6", "is another tank"),
         ("fluid.processes=2", "fluid.processes > 1"),
+        ("time.steps_per_period=6", "fewer than 8 windows per period"),
     ):
         other = load_case(case, [*SMALL, f"time.start_from={source}", change])
-        assert why in start_flow(other) and not lead_in_settings(other).get("lead_in_displaced")
+        assert why in decide_start_flow(other, world_searchable / "next", resume=False)

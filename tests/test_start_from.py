@@ -166,6 +166,7 @@ class _DisplacedPeriodicFluid(_PeriodicFluid):
 
     started_at = None
     solves = 0
+    start_up_windows = 3
 
     def start_displaced(self, displacement) -> None:
         self.started_at = np.array(displacement)
@@ -175,11 +176,10 @@ class _DisplacedPeriodicFluid(_PeriodicFluid):
         self.solves += 1
 
     def write_data(self):
-        from fsi_orchestrator.lead_in import START_UP_WINDOWS
         from fsi_orchestrator.participant import FORCE
 
         data = super().write_data()
-        if self.solves <= START_UP_WINDOWS:
+        if self.solves <= self.start_up_windows:
             data[FORCE] += (-1) ** self.solves
         return data
 

@@ -5,7 +5,6 @@ that `--help` and case errors stay fast)."""
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -71,8 +70,9 @@ def added_mass_for_preconditioning(case: Case, shell_model):
     return build_added_mass(dataclasses.replace(case, fluid=fluid), shell_model)
 
 
-def coupling_settings(case: Case):
-    """The case's [coupling] keys on the typed settings of its scheme."""
+def coupling_settings(case: Case, flow=None):
+    """The case's [coupling] keys on the typed settings of its scheme; ``flow``: the earlier
+    run's flow the fluid starts with (decide_start_flow), if any."""
     from fsi_orchestrator.case.timing import windows_per_period
     from fsi_orchestrator.coupling_settings import CouplingSettings, scheme_settings
 
@@ -86,7 +86,7 @@ def coupling_settings(case: Case):
         explicit_windows=c.explicit_periods * windows_per_period(case),
     )
     return CouplingSettings(
-        **lead_in(case),
+        **lead_in(case, flow),
         scheme_settings=scheme,
         tolerance_rel=c.tolerance_rel,
         predictor=c.predictor.value,
@@ -94,9 +94,10 @@ def coupling_settings(case: Case):
     )
 
 
-def lead_in(case: Case) -> dict:
+def lead_in(case: Case, flow=None) -> dict:
     """A fluid-only lead-in when a CFD fluid meets a structure that starts on its periodic
-    orbit (Coupling.lead_in): one period, two on a recorded orbit (time.start_from)."""
+    orbit (Coupling.lead_in): one period; on a recorded orbit (time.start_from) two from rest,
+    or one with the earlier run's ``flow`` (a FlowSource) mapped on."""
     from fsi_orchestrator.case.schema import StartMode
     from fsi_orchestrator.case.timing import windows_per_period
 
@@ -110,9 +111,11 @@ def lead_in(case: Case) -> dict:
         "lead_in_windows": windows_per_period(case),
         "lead_in_omega": 2 * math.pi * case.actuation.frequency_hz,
         "lead_in_periods": RECORDED_LEAD_IN_PERIODS if case.time.start_from else 1,
-        "lead_in_displaced": carried_flow(case) is not None,
+        "lead_in_displaced": flow is not None,
     }
 
+
+OPENFOAM_FOLDER = "openfoam"  # a run's OpenFOAM case, in its output folder
 
 # the lead-in before a start on a recorded orbit: after one period the flow still differs
 # from its periodic state (prescribed motion from rest: 26 % in thrust, 11 % in lateral force;
@@ -126,63 +129,62 @@ def corrects_start(case: Case) -> bool:
     return case.coupling.start_correction and not case.time.start_from
 
 
-def lead_in_fluid_windows(case: Case) -> int:
-    """Fluid solves before window 0: the lead-in's periods, two with the start correction."""
-    settings = lead_in(case)
+def lead_in_fluid_windows(case: Case, flow=None) -> int:
+    """Fluid solves before window 0: the lead-in's periods, two with the start correction,
+    one with an earlier run's ``flow``."""
+    settings = lead_in(case, flow)
     n = settings.get("lead_in_windows", 0)
     if settings.get("lead_in_displaced"):
         return n
     return 2 * n if corrects_start(case) else n * settings.get("lead_in_periods", 1)
 
 
-OPENFOAM_FOLDER = "openfoam"  # a run's OpenFOAM case, in its output folder
+# fewest windows per period a start with an earlier run's flow takes: the predictor's seed
+# bridges its first START_UP_WINDOWS windows from two windows on either side
+MIN_WINDOWS_WITH_FLOW = 8
+
+
+def decide_start_flow(case: Case, output: Path, resume: bool):
+    """Whether this run's CFD starts with the flow of the run time.start_from names: its
+    FlowSource, or why not (str), or None (no OpenFOAM run started from another). Decided
+    once per run: a resumed run keeps what its start did (the case folder's record)."""
+    from fluid_adapter.openfoam.flow_start import FlowSource, recorded_flow
+
+    if not case.time.start_from or case.fluid.model is not FluidModel.OPENFOAM:
+        return None
+    workdir = output / OPENFOAM_FOLDER
+    if resume:
+        return recorded_flow(workdir)
+    found = start_flow(case)
+    if isinstance(found, FlowSource) and found.case.resolve() == workdir.resolve():
+        return f"{found.case} is this run's own folder, which a fresh start replaces"
+    return found
 
 
 def start_flow(case: Case):
     """time.start_from's flow: the earlier run's OpenFOAM case at the time its checkpoint
     ended (fluid_adapter.openfoam.flow_start.FlowSource) where both runs are serial OpenFOAM
     runs in the same tank, else why not (str); None: no OpenFOAM run started from another."""
+    from fluid_adapter.openfoam.fishmesh import tank_geometry
+    from fluid_adapter.openfoam.flow_start import flow_source
+    from fsi_orchestrator.case.timing import windows_per_period
+    from fsi_orchestrator.results import read_checkpoint
+
     if not case.time.start_from or case.fluid.model is not FluidModel.OPENFOAM:
         return None
     if case.fluid.processes != 1:
         return "fluid.processes > 1 (the flow is carried between serial runs only)"
+    if windows_per_period(case) < MIN_WINDOWS_WITH_FLOW:
+        return f"fewer than {MIN_WINDOWS_WITH_FLOW} windows per period"
     path = start_from_path(case)
+    if not path.is_file():
+        return None  # the structure's start refuses it, naming the key
     try:
-        stamp = path.stat().st_mtime_ns
-    except OSError:
-        return f"{path} does not exist"
-    return _flow_at(str(path), stamp, case)
-
-
-def _flow_at(path: str, stamp: int, case: Case):
-    """start_flow of the checkpoint ``path`` (its reading cached per file version)."""
-    from fluid_adapter.openfoam.fishmesh import tank_geometry
-    from fluid_adapter.openfoam.flow_start import flow_source
-
-    t = _fluid_end(path, stamp)
-    if t is None:
-        return f"{path} is no OpenFOAM run's checkpoint"
-    return flow_source(Path(path).parent / OPENFOAM_FOLDER, t, tank_geometry(case))
-
-
-@functools.lru_cache(maxsize=8)
-def _fluid_end(path: str, stamp: int) -> float | None:
-    """The fluid's time at the end of the checkpoint ``path`` (None: it has no CFD)."""
-    from fsi_orchestrator.results import read_checkpoint
-
-    try:
-        loop, _, _ = read_checkpoint(Path(path))
-        return float(loop["coupling"]["fluid"]["t"])
+        loop, _, _ = read_checkpoint(path)
+        t = float(loop["coupling"]["fluid"]["t"])
     except (OSError, KeyError, ValueError, RuntimeError):
-        return None
-
-
-def carried_flow(case: Case):
-    """The FlowSource start_flow finds, or None."""
-    from fluid_adapter.openfoam.flow_start import FlowSource
-
-    found = start_flow(case)
-    return found if isinstance(found, FlowSource) else None
+        return f"{path} is no OpenFOAM run's checkpoint"
+    return flow_source(path.parent / OPENFOAM_FOLDER, t, tank_geometry(case))
 
 
 def checkpoint_named(case: Case, named: str):
@@ -338,9 +340,12 @@ def coupled_setup(case: Case, fluid_factory=None):
     return run.solid, run.coupling
 
 
-def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -> CoupledRun:
+def build_coupled_run(
+    case: Case, fluid_factory=None, *, resume: bool = False, flow=None
+) -> CoupledRun:
     """A partitioned run. The structure starts on the periodic orbit estimated with the fast
-    added mass (or from rest, choose_start); with an *-am scheme it keeps that mass."""
+    added mass (or from rest, choose_start); with an *-am scheme it keeps that mass. ``flow``:
+    the earlier run's flow the fluid starts with (decide_start_flow; the factory's too)."""
     from fluid_adapter.fast import fast_added_mass
     from fluid_adapter.potential.participant import PotentialParticipant
     from fsi_orchestrator.acceleration import IQNIMVJAcceleration
@@ -361,7 +366,7 @@ def build_coupled_run(case: Case, fluid_factory=None, *, resume: bool = False) -
         case, start_note = choose_start(case, solid)
     if start_note is not None:
         solid = build_shell_participant(case, model)
-    settings = coupling_settings(case)
+    settings = coupling_settings(case, flow)
     scale = settings.added_mass_scale  # None: a plain scheme
     if fluid_factory is not None:
         fluid = fluid_factory(case, solid)
@@ -428,9 +433,10 @@ def learned_jacobian(case: Case, n_nodes: int) -> dict:
     return state
 
 
-def openfoam_fluid_factory(workdir, *, fresh: bool):
+def openfoam_fluid_factory(workdir, *, fresh: bool, flow=None):
     """Builds the OpenFOAM participant in ``workdir``: regenerated for a fresh run, reused (its
-    time folders are the fluid's checkpoints) when resuming."""
+    time folders are the fluid's checkpoints) when resuming. ``flow``: an earlier run's flow
+    to start with (decide_start_flow)."""
     import shutil
 
     from fluid_adapter.openfoam import build_openfoam_participant
@@ -442,13 +448,13 @@ def openfoam_fluid_factory(workdir, *, fresh: bool):
         workdir.mkdir(parents=True, exist_ok=True)
         workdir.chmod(0o755)  # as root the persistent driver runs OpenFOAM as `nobody`
         _, n_windows = case_schedule(case)
-        n_windows += lead_in_fluid_windows(case)
+        n_windows += lead_in_fluid_windows(case, flow)
         return build_openfoam_participant(
             case,
             workdir,
             n_windows=n_windows,
             mesh_scale=case.fluid.mesh_scale,
-            flow_from=carried_flow(case) if fresh else None,
+            flow_from=flow if fresh else None,
         )
 
     return factory

@@ -36,13 +36,12 @@ from .common import (
 )
 from .compose import (
     build_coupled_run,
-    carried_flow,
+    decide_start_flow,
     is_coupled,
     learned_jacobian_path,
     openfoam_fluid_factory,
     recorded_start,
     shell_with_fast_fluid,
-    start_flow,
     start_from_path,
 )
 from .linear import swimming_summary
@@ -240,13 +239,17 @@ def run_dynamic(
     identity = case_identity(case)
     progress = RunProgress(show_progress, hold=True)
     start_note = None
+    flow = decide_start_flow(case, output, resume)  # time.start_from's liquid, once
+    if isinstance(flow, str):  # the orbit is carried over, the flow is not
+        print(f"note: time.start_from: the flow starts from rest: {flow}", file=sys.stderr)
+        flow = None
     if is_coupled(case):
         factory = None
         if case.fluid.model is FluidModel.OPENFOAM:
-            factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume)
+            factory = openfoam_fluid_factory(output / "openfoam", fresh=not resume, flow=flow)
             factory = timed_factory(factory, progress)
         with progress.phase("set-up: structure, start and coupling"):
-            run = build_coupled_run(case, factory, resume=resume)
+            run = build_coupled_run(case, factory, resume=resume, flow=flow)
         case, solid, coupling, start_note = run.case, run.solid, run.coupling, run.start_note
         if start_note is not None:
             print(start_note, file=sys.stderr)
@@ -277,9 +280,6 @@ def run_dynamic(
         # files past this run's end would stay)
         shutil.rmtree(output / "vtk", ignore_errors=True)
     start = time.perf_counter()
-    why_not = start_flow(case) if coupling is not None and not resume else None
-    if isinstance(why_not, str):  # the orbit is carried over, the flow is not
-        print(f"note: time.start_from: the flow starts from rest: {why_not}", file=sys.stderr)
     if coupling is not None and coupling.settings.lead_in_windows > 0 and not resume:
         progress.release()
         progress.say(
@@ -331,7 +331,7 @@ def run_dynamic(
     summary["setup_s"] = start - set_up
     if case.time.start_from:  # where the structure's orbit and start state came from
         summary["start_from"] = str(start_from_path(case))
-        flow = carried_flow(case)  # ... and the liquid's (None: built up from rest)
+        # ... and the liquid's (None: built up from rest)
         summary["start_from_flow"] = None if flow is None else str(flow.case / flow.time_name)
     if added is not None:  # the fast fluid's added mass is in the structure's equations
         summary.update(coupling_scheme="monolithic", mean_fluid_solves_per_window=1.0)

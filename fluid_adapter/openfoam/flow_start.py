@@ -11,6 +11,7 @@ a little off the one moved there at once (docs/coupling.md).
 
 from __future__ import annotations
 
+import json
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -21,7 +22,8 @@ from numpy.typing import NDArray
 
 from . import runner
 from .casefiles import MOTION_FIELD
-from .errors import DriverError
+from .drivers import run_mesh_motion
+from .errors import DriverError, MeshFoldedError
 from .fishmesh import TankGeometry
 from .foamio import read_points
 from .foamrun import FoamRun, numeric_dirs
@@ -31,6 +33,11 @@ MOTION_FIELDS = frozenset({MOTION_FIELD, "cellMotionU"})
 # steps of the mesh's move to the start (one would do: the motion solver is linear in the
 # plate's velocity; a few keep each step's cells near their last shape)
 RAMP_WINDOWS = 4
+# windows a CFD started this way is off its force before it repeats the source's last period
+# (coarse fish, 3 Hz: within 0.1 % of the swing from window 4 on at 40 windows per period;
+# 2 % in window 4 and 0.3 % from window 5 on at 20)
+START_UP_WINDOWS = 4
+RECORD = "start_flow.json"  # in the case folder: the flow it started with (a resume's answer)
 
 
 @dataclass(frozen=True)
@@ -48,7 +55,10 @@ def flow_source(case: Path, t: float, tank: TankGeometry) -> FlowSource | str:
         return f"{case} holds no OpenFOAM case"
     if any(case.glob("processor[0-9]*")):
         return f"{case} is decomposed (the flow is carried between serial runs only)"
-    points = read_points(case / "constant" / "polyMesh" / "points")
+    try:
+        points = read_points(case / "constant" / "polyMesh" / "points")
+    except Exception as exc:  # noqa: BLE001  (foamlib's parse errors have no common base)
+        return f"{case}: its mesh cannot be read ({exc})"
     half = np.array([0.0, tank.depth / 2, tank.width / 2])
     walls = np.array([[tank.x_front, 0, 0] - half, [tank.x_back, 0, 0] + half])
     if not np.allclose([points.min(axis=0), points.max(axis=0)], walls, rtol=0, atol=1e-6):
@@ -60,32 +70,38 @@ def flow_source(case: Path, t: float, tank: TankGeometry) -> FlowSource | str:
     return FlowSource(case, near[1])
 
 
-def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource | None = None) -> None:
+def recorded_flow(run_path: Path) -> FlowSource | None:
+    """The flow a case folder started with (place's record), None: it started at rest."""
+    try:
+        record = json.loads((run_path / RECORD).read_text())
+        return FlowSource(Path(record["case"]), str(record["time_name"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource) -> None:
     """Time 0 of ``run`` (a fresh serial case) with its plate at ``displacement`` (interface
-    points) and the mesh moved with it; with ``source``, that run's flow mapped on. pimpleFoam
-    starts from it with a first-order time step: its first windows' forces zig-zag about the
-    source's (coarse fish, 3 Hz: 0.00 / 0.71 / 0.37 N against 0.24 / 0.36 / 0.47 N) and agree
-    within 0.1 % of the force's swing from the fourth window on (fsi_orchestrator.lead_in)."""
+    points), the mesh moved with it, and the flow of ``source`` mapped on. pimpleFoam starts
+    from it with a first-order time step: its first windows' forces zig-zag about the source's
+    (START_UP_WINDOWS)."""
     if run.processes != 1:
-        raise DriverError(f"{run.path}: only a serial case starts displaced")
-    zero = run.path / "0"
-    run.remove_samples(dt)
-    run.write_start(0.0, dt)
-    for k in range(RAMP_WINDOWS):
-        run.write_window(k * dt, (k + 1) * dt, displacement / (RAMP_WINDOWS * dt))
+        raise DriverError(f"{run.path}: only a serial case starts with another run's flow")
     end = RAMP_WINDOWS * dt
-    run.reset_body_bc("0")
-    run.set_window("0", end, dt, write_every=RAMP_WINDOWS)
-    run.set_controls(adjustTimeStep=False)
-    runner.utility("moveDynamicMesh", run.path, "-noFunctionObjects")
-    moved = run.path / run.time_folder(end, dt)
+    checks = run_mesh_motion(run, lambda t: displacement * t / end, dt, RAMP_WINDOWS)
+    if checks and not checks[-1].ok:
+        raise MeshFoldedError(
+            f"{run.path}: the mesh moved to the start's plate shape fails checkMesh "
+            f"(min cell volume {checks[-1].min_volume_m3:.3g} m3); start without time.start_from"
+        )
+    zero, moved = run.path / "0", run.path / run.time_folder(end, dt)
     (zero / "polyMesh").mkdir(exist_ok=True)
     shutil.copyfile(moved / "polyMesh" / "points", zero / "polyMesh" / "points")
     run.remove_times({"0"})
     run.remove_samples(dt)
     run.write_start(0.0, dt)  # the samples of a fresh case
-    if source is not None:
-        _map_flow(run, source)
+    _map_flow(run, source)
+    record = {"case": str(source.case), "time_name": source.time_name}
+    (run.path / RECORD).write_text(json.dumps(record) + "\n")
 
 
 def _map_flow(run: FoamRun, source: FlowSource) -> None:

@@ -22,7 +22,7 @@ from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, Sta
 from .checkmesh import MeshQuality, folded_mesh
 from .drivers import PersistentDriver, RelaunchDriver
 from .errors import DivergenceError, DriverError, MeshFoldedError
-from .flow_start import FlowSource, place
+from .flow_start import START_UP_WINDOWS, FlowSource, place
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
 from .slices import Surface, sample_slices
@@ -132,11 +132,18 @@ class OpenFoamParticipant:
                 "smaller drive or a stiffer design keeps the mesh whole"
             )
 
+    @property
+    def start_up_windows(self) -> int:
+        """Windows a start_displaced case is off its force (flow_start.START_UP_WINDOWS)."""
+        return START_UP_WINDOWS
+
     def start_displaced(self, displacement: NDArray) -> None:
         """Before the first window (optional in the protocol; the lead-in on a recorded
         orbit): the plate at ``displacement`` (interface points), the mesh moved with it, and
         the flow of ``flow_from`` mapped on (flow_start.py)."""
         u = np.asarray(displacement, dtype=float)
+        if self.flow_from is None:
+            raise DriverError(f"{self.run.path}: no earlier run's flow to start displaced with")
         if u.shape != self.run.interface.points0.shape or self.time != 0.0:
             raise DriverError("start_displaced needs a fresh case and interface displacements")
         place(self.run, u, self.dt, self.flow_from)

@@ -569,11 +569,12 @@ class Time:
         "dynamic with actuation: start on the periodic orbit an earlier run ended on (its "
         "output folder or checkpoint.h5; relative paths from the case folder), from its last "
         "state, instead of the fast model's orbit. An OpenFOAM run started from an OpenFOAM "
-        "run (both serial) starts with that run's flow mapped onto its mesh and follows the "
-        "orbit for one period before window 0; otherwise its lead-in follows it for two "
-        "periods from rest. It needs the same shell mesh and frequency and a run of whole "
-        "periods; the fluid's mesh level or model may differ: a default-level run from the "
-        "coarse level's periodic state (docs/coupling.md).",
+        "run (both serial, the same tank, 8 or more windows per period) starts with that "
+        "run's flow mapped onto its mesh and follows the orbit for one period before window "
+        "0; otherwise its lead-in follows it for two periods from rest. It needs the same "
+        "shell mesh and frequency and a run of whole periods; the fluid's mesh level or model "
+        "may differ: a default-level run from the coarse level's periodic state "
+        "(docs/coupling.md).",
     )
 
 
