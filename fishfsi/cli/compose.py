@@ -167,8 +167,8 @@ def start_flow(case: Case):
     runs in the same tank, else why not (str); None: no OpenFOAM run started from another."""
     from fluid_adapter.openfoam.fishmesh import tank_geometry
     from fluid_adapter.openfoam.flow_start import flow_source
+    from fsi_orchestrator.case import CaseError
     from fsi_orchestrator.case.timing import windows_per_period
-    from fsi_orchestrator.results import read_checkpoint
 
     if not case.time.start_from or case.fluid.model is not FluidModel.OPENFOAM:
         return None
@@ -180,10 +180,15 @@ def start_flow(case: Case):
     if not path.is_file():
         return None  # the structure's start refuses it, naming the key
     try:
-        loop, _, _ = read_checkpoint(path)
-        t = float(loop["coupling"]["fluid"]["t"])
-    except (OSError, KeyError, ValueError, RuntimeError):
-        return f"{path} is no OpenFOAM run's checkpoint"
+        t = from_earlier_checkpoint(
+            case,
+            "time.start_from",
+            case.time.start_from,
+            lambda loop, _: float(loop["coupling"]["fluid"]["t"]),
+            "OpenFOAM run's",
+        )
+    except CaseError as err:
+        return str(err).removeprefix("time.start_from: ")
     return flow_source(path.parent / OPENFOAM_FOLDER, t, tank_geometry(case))
 
 
