@@ -366,7 +366,8 @@ def test_a_run_started_from_another_openfoam_run_starts_with_its_flow(world_sear
     and its forces repeat the source's last period once the mapped flow's first windows are
     past: measured within 0.3 % of the force's swing from window 5 on here (20 windows per
     period), 0.1 % from window 4 on the coarse mesh at 40. A lead-in from rest is still 11 %
-    off the lateral force after one period (docs/coupling.md)."""
+    off the lateral force after one period (docs/coupling.md). Either run may be decomposed
+    (a cluster's sweep): serial -> 2 ranks -> serial here."""
     from fishfsi.cli.compose import decide_start_flow
     from fluid_adapter.openfoam.fishmesh import FISH_PATCHES
     from fluid_adapter.openfoam.foamio import read_points
@@ -376,48 +377,56 @@ def test_a_run_started_from_another_openfoam_run_starts_with_its_flow(world_sear
 
     case = ROOT / "cases" / "fixed_head_3Hz"
     explicit = ["--set", "coupling.scheme=explicit-am", "--set", "time.periods=1"]
-    source, started = world_searchable / "source", world_searchable / "started"
+    source = world_searchable / "source"
     settle = ["--set", "time.periods=3", "--set", "time.periodic_feedback_per_s=10"]
     done = subprocess.run(
         fsi_run(case, source, *explicit, *settle), capture_output=True, text=True, timeout=900
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    start = ["--set", f"time.start_from={source}"]
-    cmd = [arg for arg in fsi_run(case, started, *explicit, *start) if arg != "--quiet"]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
-    assert done.returncode == 0, done.stderr[-3000:]
-    summary = json.loads(done.stdout)
-    loop, _, _ = read_checkpoint(source / "checkpoint.h5")
-    end = loop["coupling"]["fluid"]
-    folder = Path(summary["start_from_flow"])
-    assert folder.parent == source / "openfoam" and float(folder.name) == pytest.approx(end["t"])
-    assert "lead-in: 20 prescribed-motion fluid windows" in done.stderr
-    # the plate and the mesh start where the source's ended
-    fluid = started / "openfoam"
+    dt = 1 / (3.0 * 20)
+    for name, ranks in (("started", 2), ("again", 1)):
+        start = ["--set", f"time.start_from={source}", "--set", f"fluid.processes={ranks}"]
+        started = world_searchable / name
+        # --output relative to the working folder (OpenFOAM runs in the case folder)
+        cmd = [arg for arg in fsi_run(case, Path(name), *explicit, *start) if arg != "--quiet"]
+        done = subprocess.run(
+            cmd, capture_output=True, text=True, timeout=900, cwd=world_searchable
+        )
+        assert done.returncode == 0, done.stderr[-3000:]
+        summary = json.loads(done.stdout)
+        loop, _, _ = read_checkpoint(source / "checkpoint.h5")
+        end = loop["coupling"]["fluid"]
+        folder = Path(summary["start_from_flow"])
+        assert folder.parent == source / "openfoam" and float(folder.name) == pytest.approx(
+            end["t"]
+        )
+        assert "lead-in: 20 prescribed-motion fluid windows" in done.stderr
+        # ... with its flow: the lead-in's lateral force repeats the source's last period
+        fluid = started / "openfoam"
+        lead_in = _forces_at_window_ends(
+            fluid / "postProcessing" / "fishForces" / "0" / "force.dat", dt, 20
+        )
+        with h5py.File(source / "results.h5") as h5:
+            last = h5["fluid/force_n"][-20:, 2]
+        swing = np.ptp(last)
+        assert np.abs(lead_in[4:] - last[4:]).max() < 0.01 * swing, name
+        assert np.abs(lead_in[:3] - last[:3]).max() > 0.1 * swing, name  # the start-up
+        source = started  # the next run starts from this one
+    # the plate and the mesh start where the (decomposed) source ended
     interface = read_interface(fluid, FISH_PATCHES)
     moved = read_points(fluid / "0" / "polyMesh" / "points")[interface.mesh_points]
     np.testing.assert_allclose(moved - interface.points0, end["displacement"], atol=1e-9)
-    # ... with its flow: the lead-in's lateral force repeats the source's last period
-    dt = 1 / (3.0 * 20)
-    lead_in = _forces_at_window_ends(
-        fluid / "postProcessing" / "fishForces" / "0" / "force.dat", dt, 20
-    )
-    with h5py.File(source / "results.h5") as h5:
-        last = h5["fluid/force_n"][-20:, 2]
-    swing = np.ptp(last)
-    assert np.abs(lead_in[4:] - last[4:]).max() < 0.01 * swing
-    assert np.abs(lead_in[:3] - last[:3]).min() > 0.1 * swing  # the mapped flow's start-up
-    # a resume keeps what the start did; another tank, a decomposed run or a start from the
-    # run's own folder (a fresh start replaces it) builds its flow up from rest, and says why
-    again = load_case(case, [*SMALL, f"time.start_from={source}"])
+    # a resume keeps what the start did; another tank, or a start from the run's own folder
+    # (a fresh start replaces it) builds its flow up from rest, and says why
+    decomposed = world_searchable / "started"
+    again = load_case(case, [*SMALL, f"time.start_from={decomposed}"])
     assert decide_start_flow(again, started, resume=True) == decide_start_flow(
         again, world_searchable / "next", resume=False
     )
-    assert "own folder" in decide_start_flow(again, source, resume=False)
+    assert "own folder" in decide_start_flow(again, decomposed, resume=False)
     for change, why in (
         ("fluid.tank_length_m=0.6", "is another tank"),
-        ("fluid.processes=2", "fluid.processes > 1"),
         ("time.steps_per_period=6", "fewer than 8 windows per period"),
     ):
-        other = load_case(case, [*SMALL, f"time.start_from={source}", change])
+        other = load_case(case, [*SMALL, f"time.start_from={decomposed}", change])
         assert why in decide_start_flow(other, world_searchable / "next", resume=False)

@@ -276,12 +276,13 @@ def cannot_write(output: Path, err: OSError, flag: str = "--output ") -> str:
 
 def output_folder(given: str | None, default: Path) -> Path:
     """``--output``'s folder; an empty one (a shell variable that was not set) is refused
-    rather than taken for the default."""
+    rather than taken for the default. Absolute: OpenFOAM and its handshake scripts run in the
+    case folder, where a relative path would point elsewhere."""
     if given is None:
-        return default
+        return default.absolute()
     if not given.strip():
         raise CaseError("--output is empty: give a folder, or leave --output out for the default")
-    return Path(given)
+    return Path(given).absolute()
 
 
 def atomic_write(path: Path, text: str) -> None:

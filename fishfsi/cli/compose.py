@@ -163,8 +163,8 @@ def decide_start_flow(case: Case, output: Path, resume: bool):
 
 def start_flow(case: Case):
     """time.start_from's flow: the earlier run's OpenFOAM case at the time its checkpoint
-    ended (fluid_adapter.openfoam.flow_start.FlowSource) where both runs are serial OpenFOAM
-    runs in the same tank, else why not (str); None: no OpenFOAM run started from another."""
+    ended (fluid_adapter.openfoam.flow_start.FlowSource) where both are OpenFOAM runs in the
+    same tank, else why not (str); None: no OpenFOAM run started from another."""
     from fluid_adapter.openfoam.fishmesh import tank_geometry
     from fluid_adapter.openfoam.flow_start import flow_source
     from fsi_orchestrator.case import CaseError
@@ -172,8 +172,6 @@ def start_flow(case: Case):
 
     if not case.time.start_from or case.fluid.model is not FluidModel.OPENFOAM:
         return None
-    if case.fluid.processes != 1:
-        return "fluid.processes > 1 (the flow is carried between serial runs only)"
     if windows_per_period(case) < MIN_WINDOWS_WITH_FLOW:
         return f"fewer than {MIN_WINDOWS_WITH_FLOW} windows per period"
     path = start_from_path(case)

@@ -437,6 +437,11 @@ def run_mesh_motion(
     run.set_window("0", n_steps * dt, dt, write_every=n_steps)
     run.set_controls(adjustTimeStep=False)
     log = runner.run(
-        runner.Command(app="moveDynamicMesh", case=run.path, args=("-noFunctionObjects",))
+        runner.Command(
+            app="moveDynamicMesh",
+            case=run.path,
+            args=("-noFunctionObjects",),
+            processes=run.processes,
+        )
     )
     return parse_steps(log.read_text(), counts)

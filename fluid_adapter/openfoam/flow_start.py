@@ -6,7 +6,8 @@ build the flow up (docs/coupling.md). Instead the mesh is moved to the structure
 (``moveDynamicMesh``, no flow), and the earlier run's flow at its last time folder is mapped
 onto it (``mapFields -consistent``: the same tank at any mesh level). Both become time 0. The
 mesh motion integrates the plate's velocity, so a mesh that followed the plate for periods lies
-a little off the one moved there at once (docs/coupling.md).
+a little off the one moved there at once (docs/coupling.md). Either case may be decomposed:
+the mesh then moves on the target's ranks and mapFields reads and writes processor folders.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from numpy.typing import NDArray
 from . import runner
 from .casefiles import MOTION_FIELD
 from .drivers import run_mesh_motion
-from .errors import DriverError, MeshFoldedError
+from .errors import MeshFoldedError
 from .fishmesh import TankGeometry
 from .foamio import read_points
 from .foamrun import FoamRun, numeric_dirs
@@ -42,19 +43,19 @@ RECORD = "start_flow.json"  # in the case folder: the flow it started with (a re
 
 @dataclass(frozen=True)
 class FlowSource:
-    """An earlier run's OpenFOAM case and the time folder its checkpoint ended at."""
+    """An earlier run's OpenFOAM case and the time folder its checkpoint ended at (in its
+    processor folders where ``decomposed``)."""
 
     case: Path
     time_name: str
+    decomposed: bool = False
 
 
 def flow_source(case: Path, t: float, tank: TankGeometry) -> FlowSource | str:
-    """The serial OpenFOAM case folder ``case`` at time ``t`` in ``tank``, or why it cannot
-    be one."""
+    """The OpenFOAM case folder ``case`` (serial or decomposed) at time ``t`` in ``tank``, or
+    why it cannot be one."""
     if not (case / "system" / "controlDict").is_file():
         return f"{case} holds no OpenFOAM case"
-    if any(case.glob("processor[0-9]*")):
-        return f"{case} is decomposed (the flow is carried between serial runs only)"
     try:
         points = read_points(case / "constant" / "polyMesh" / "points")
     except Exception as exc:  # noqa: BLE001  (foamlib's parse errors have no common base)
@@ -63,29 +64,30 @@ def flow_source(case: Path, t: float, tank: TankGeometry) -> FlowSource | str:
     walls = np.array([[tank.x_front, 0, 0] - half, [tank.x_back, 0, 0] + half])
     if not np.allclose([points.min(axis=0), points.max(axis=0)], walls, rtol=0, atol=1e-6):
         return f"{case} is another tank"
-    found = [(abs(value - t), name) for value, name in numeric_dirs(case)]
-    near = min(found, default=(np.inf, ""))
-    if near[0] > 1e-6 * max(1.0, abs(t)) or not (case / near[1] / "U").is_file():
-        return f"{case} has no time folder at t = {t:.12g} s, where its checkpoint ended"
-    return FlowSource(case, near[1])
+    for root, decomposed in ((case, False), (case / "processor0", True)):
+        found = [(abs(value - t), name) for value, name in numeric_dirs(root)]
+        near = min(found, default=(np.inf, ""))
+        if near[0] <= 1e-6 * max(1.0, abs(t)) and (root / near[1] / "U").is_file():
+            return FlowSource(case, near[1], decomposed)
+    return f"{case} has no time folder at t = {t:.12g} s, where its checkpoint ended"
 
 
 def recorded_flow(run_path: Path) -> FlowSource | None:
     """The flow a case folder started with (place's record), None: it started at rest."""
     try:
         record = json.loads((run_path / RECORD).read_text())
-        return FlowSource(Path(record["case"]), str(record["time_name"]))
+        return FlowSource(
+            Path(record["case"]), str(record["time_name"]), bool(record.get("decomposed"))
+        )
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
 
 def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource) -> None:
-    """Time 0 of ``run`` (a fresh serial case) with its plate at ``displacement`` (interface
-    points), the mesh moved with it, and the flow of ``source`` mapped on. pimpleFoam starts
-    from it with a first-order time step: its first windows' forces zig-zag about the source's
-    (START_UP_WINDOWS)."""
-    if run.processes != 1:
-        raise DriverError(f"{run.path}: only a serial case starts with another run's flow")
+    """Time 0 of ``run`` (a fresh case, serial or decomposed) with its plate at
+    ``displacement`` (interface points), the mesh moved with it, and the flow of ``source``
+    mapped on. pimpleFoam starts from it with a first-order time step: its first windows'
+    forces zig-zag about the source's (START_UP_WINDOWS)."""
     end = RAMP_WINDOWS * dt
     checks = run_mesh_motion(run, lambda t: displacement * t / end, dt, RAMP_WINDOWS)
     if checks and checks[-1].min_volume_m3 <= 0:  # inside-out cells (poor ones run)
@@ -93,30 +95,41 @@ def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource) ->
             f"{run.path}: the start's plate shape folds this mesh (min cell volume "
             f"{checks[-1].min_volume_m3:.3g} m3, log.moveDynamicMesh)"
         )
-    zero, moved = run.path / "0", run.path / run.time_folder(end, dt)
-    (zero / "polyMesh").mkdir(exist_ok=True)
-    shutil.copyfile(moved / "polyMesh" / "points", zero / "polyMesh" / "points")
+    moved = run.time_folder(end, dt)
+    for root in run.data_roots():  # the moved mesh is time 0's
+        (root / "0" / "polyMesh").mkdir(exist_ok=True)
+        shutil.copyfile(root / moved / "polyMesh" / "points", root / "0" / "polyMesh" / "points")
     run.remove_times({"0"})
     run.remove_samples(dt)
     run.write_start(0.0, dt)  # the samples of a fresh case
     _map_flow(run, source)
-    record = {"case": str(source.case), "time_name": source.time_name}
+    record = {
+        "case": str(source.case),
+        "time_name": source.time_name,
+        "decomposed": source.decomposed,
+    }
     (run.path / RECORD).write_text(json.dumps(record) + "\n")
 
 
 def _map_flow(run: FoamRun, source: FlowSource) -> None:
     """The source's flow fields onto time 0 (on its moved mesh): only the fields time 0 already
-    has, less the mesh motion's; mapFields writes every field it finds (old times too)."""
-    zero = run.path / "0"
-    before = {p.name for p in zero.iterdir() if p.is_file()}
+    has, less the mesh motion's; mapFields writes every field it finds (old times too). It
+    runs serially and reads or writes processor folders itself (-parallelSource/-Target)."""
+    zeros = [root / "0" for root in run.data_roots()]
+    before = {p.name for p in zeros[0].iterdir() if p.is_file()}
+    args = [str(source.case), "-sourceTime", source.time_name, "-consistent"]
+    args += ["-parallelSource"] if source.decomposed else []
+    args += ["-parallelTarget"] if run.processes > 1 else []
     with tempfile.TemporaryDirectory(dir=run.path) as keep:
-        for name in before & MOTION_FIELDS:
-            shutil.copy2(zero / name, Path(keep) / name)
-        runner.utility(
-            "mapFields", run.path, str(source.case), "-sourceTime", source.time_name, "-consistent"
-        )
-        for path in zero.iterdir():
-            if path.is_file() and path.name not in before:
-                path.unlink()
-        for name in before & MOTION_FIELDS:
-            shutil.copy2(Path(keep) / name, zero / name)
+        kept = [Path(keep) / str(rank) for rank in range(len(zeros))]
+        for zero, folder in zip(zeros, kept, strict=True):
+            folder.mkdir()
+            for name in before & MOTION_FIELDS:
+                shutil.copy2(zero / name, folder / name)
+        runner.utility("mapFields", run.path, *args)
+        for zero, folder in zip(zeros, kept, strict=True):
+            for path in zero.iterdir():
+                if path.is_file() and path.name not in before:
+                    path.unlink()
+            for name in before & MOTION_FIELDS:
+                shutil.copy2(folder / name, zero / name)

@@ -128,10 +128,11 @@ class Command:
     def cwd(self) -> Path:
         """Decomposed timeVaryingMappedFixedValue opens ``../constant/boundaryData`` relative
         to the working directory: start parallel runs from a processor folder."""
-        return self.case / "processor0" if self.processes > 1 else self.case
+        case = self.case.absolute()  # OpenFOAM takes a relative -case from the cwd
+        return case / "processor0" if self.processes > 1 else case
 
     def argv(self) -> list[str]:
-        cmd = [executable(self.app), "-case", str(self.case), *self.args]
+        cmd = [executable(self.app), "-case", str(self.case.absolute()), *self.args]
         if self.processes > 1:
             cmd = [executable("mpirun"), "-np", str(self.processes), *cmd, "-parallel"]
         options = []
