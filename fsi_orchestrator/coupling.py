@@ -113,6 +113,10 @@ class Coupling:
             displaced=settings.lead_in_displaced,
         )
         self.resumed_from_scheme: CouplingScheme | None = None  # a resumed run's former scheme
+        # the window from which every window is iterated, set during the run (a run whose
+        # explicit windows became periodic, coupling.explicit_until_periodic); None: the
+        # scheme's rule alone
+        self.iterate_from: int | None = None
 
     @property
     def fluid_wall_s(self) -> float:
@@ -223,7 +227,7 @@ class Coupling:
         if window == 0:
             self.lead_in(solid, dt)
         t_end = solid.time + dt
-        iterate = self.settings.iterates(window)
+        iterate = self.iterates(window)
         self.predictor.use_rules(PERIODIC_RULES if iterate else EXPLICIT_RULES)
         x = self._first_iterate(t_end)
         self.criteria.new_window(window, max_iterations=None if iterate else 1)
@@ -236,6 +240,12 @@ class Coupling:
         self.failures.check_growth(x_tilde, window, self.criteria.iteration, iterated=iterate)
         self.force_scales = (self.force_scales + [self._force_norm])[-SCALE_MEMORY:]
         return self._report(status, iterate, misses)
+
+    def iterates(self, window: int) -> bool:
+        """Whether window ``window`` (0-based) is iterated: the scheme's rule, or from
+        ``iterate_from`` on (set once a run's explicit windows are periodic)."""
+        switched = self.iterate_from is not None and window >= self.iterate_from
+        return switched or self.settings.iterates(window)
 
     def _iterate(
         self, solid: Participant, x: Iterate, dt: float, window: int
@@ -306,6 +316,7 @@ class Coupling:
     def save_state(self) -> dict[str, Any]:
         return {
             "scheme": np.bytes_(str(self.settings.scheme)),
+            "iterate_from": -1 if self.iterate_from is None else self.iterate_from,
             "force_scales": np.array(self.force_scales),
             "norms": np.array(self.failures.norms),
             "turns": np.array(self.failures.turns),
@@ -327,6 +338,10 @@ class Coupling:
         saved = state.get("scheme", str(self.settings.scheme).encode())  # older runs: none
         saved = CouplingScheme(saved.decode() if isinstance(saved, bytes) else str(saved))
         self.resumed_from_scheme = None if saved is self.settings.scheme else saved
+        # a switch to iterated windows holds where the scheme can iterate (a resume under
+        # explicit-am goes on with one solve per window); older runs: none
+        switched = int(state.get("iterate_from", -1))
+        self.iterate_from = switched if switched >= 0 and self.settings.implicit else None
         self.force_scales = [float(v) for v in np.atleast_1d(state["force_scales"])]
         self.failures.norms = [float(v) for v in np.atleast_1d(state["norms"])]
         self.failures.turns = [float(v) for v in np.atleast_1d(state.get("turns", []))]

@@ -105,7 +105,8 @@ class FailureHandling:
                 f"the interface force flipped sign in each of the last {FLIP_WINDOWS} windows "
                 f"and grew from {first:.3g} to {norm:.3g} N: one fluid solve per window is "
                 f'unstable here (coupling.scheme = "{self.scheme}"); iterate the windows '
-                '(coupling.scheme = "iqn-ils-am" with coupling.explicit_periods = 0) or take '
+                '(coupling.scheme = "iqn-ils-am" with coupling.explicit_periods = 0 and '
+                "coupling.explicit_until_periodic = false) or take "
                 "more time.steps_per_period",
                 field=self.field,
                 window=window,

@@ -250,6 +250,93 @@ def test_a_run_does_not_end_as_periodic_during_its_explicit_start_up(tmp_path):
     assert said[31].startswith("periodic after 4 periods (time.periodic_tolerance = 0.01)")
 
 
+ADAPTIVE_BEAM = """
+[geometry]
+kind = "beam"
+[actuation]
+frequency_hz = 5.0
+[time]
+periods = 12
+steps_per_period = 10
+periodic_tolerance = 0.01
+[mesh]
+level = "coarse"
+[fluid]
+model = "potential"
+mesh_level = "coarse"
+[coupling]
+scheme = "iqn-ils-am"
+partitioned = true
+explicit_until_periodic = true
+[output]
+vtk = false
+"""
+
+
+def test_explicit_windows_until_periodic_then_iterated_ones_and_a_resume_keeps_the_switch(
+    tmp_path,
+):
+    """coupling.explicit_until_periodic: one solve per window until the periods agree to
+    EXPLICIT_SWITCH_TOLERANCE twice in a row, then iterated windows until they agree to
+    time.periodic_tolerance. The beam in the liquid starts on its linear orbit: periodic in its
+    explicit windows after 3 periods (the first that can tell), iterated in period 4, and
+    periodic then. A run stopped at the switch and resumed goes on iterating from there."""
+    case = tmp_path / "beam"
+    case.mkdir()
+    (case / "case.toml").write_text(ADAPTIVE_BEAM)
+    cmd = [sys.executable, "-m", "fishfsi.cli.run", "--json", str(case)]
+
+    def run(output: str, *extra: str) -> tuple[dict, str, np.ndarray, np.ndarray]:
+        done = subprocess.run(
+            [*cmd, "--output", str(tmp_path / output), *extra], capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        with h5py.File(tmp_path / output / "results.h5") as h5:
+            iterated = h5["coupling/iterated"][:, 0]
+            tip = h5["shell/tip_displacement_m"][:, 2]
+        return json.loads(done.stdout), done.stderr, iterated, tip
+
+    summary, said, iterated, tip = run("whole")
+    np.testing.assert_array_equal(iterated, [0] * 30 + [1] * 10)
+    assert "periodic in its explicit windows after 3 periods" in said
+    assert "iterating from window 31 (coupling.explicit_until_periodic)" in said
+    assert summary["stopped_periodic"].startswith("periodic after 4 periods")
+    assert summary["explicit_windows"] == 30
+    _, said, first, _ = run("split", "--set", "time.periods=3")  # ends at the switch
+    np.testing.assert_array_equal(first, [0] * 30)
+    assert "note: coupling.explicit_until_periodic: every window took one fluid solve" in said
+    again, said, resumed, resumed_tip = run("split", "--resume")
+    assert "periodic in its explicit windows" not in said  # the checkpoint kept the switch
+    np.testing.assert_array_equal(resumed, iterated)
+    np.testing.assert_allclose(resumed_tip, tip, rtol=0, atol=1e-9 * np.abs(tip).max())
+    assert again["stopped_periodic"] == summary["stopped_periodic"]
+    # resumed under explicit-am, the switch does not hold: one solve per window goes on
+    run("other", "--set", "time.periods=3")
+    explicit = ["coupling.scheme=explicit-am", "coupling.explicit_until_periodic=false"]
+    longer = ["time.periods=5", "time.periodic_tolerance=1e-9"]  # no periodic stop at once
+    sets = [arg for s in [*explicit, *longer] for arg in ("--set", s)]
+    _, _, flags, _ = run("other", "--resume", *sets)
+    np.testing.assert_array_equal(flags, [0] * 50)
+
+
+@pytest.mark.parametrize(
+    "sets, named",
+    [
+        (["coupling.scheme=explicit-am"], 'applies to coupling.scheme = "iqn-ils-am" only'),
+        ([], "needs time.periodic_tolerance"),
+        (["coupling.explicit_periods=2"], "keep one of them"),
+    ],
+)
+def test_explicit_until_periodic_needs_iterations_a_tolerance_and_no_fixed_start_up(
+    tmp_path, sets, named
+):
+    text = ADAPTIVE_BEAM if sets else ADAPTIVE_BEAM.replace("periodic_tolerance = 0.01\n", "")
+    (tmp_path / "case.toml").write_text(text)
+    with pytest.raises(CaseError, match="coupling.explicit_until_periodic") as err:
+        load_case(tmp_path, sets)
+    assert named in str(err.value)
+
+
 # the tail's mean position and swing per period [mm] of two coarse OpenFOAM runs with
 # explicit-am (fsi-sweep cases/fixed_head_3Hz --set fluid.mesh_level=coarse
 # --set coupling.scheme=explicit-am, 40 windows per period): the 3 Hz square wave's mean flips

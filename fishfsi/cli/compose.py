@@ -73,17 +73,20 @@ def added_mass_for_preconditioning(case: Case, shell_model):
 def coupling_settings(case: Case, flow=None):
     """The case's [coupling] keys on the typed settings of its scheme; ``flow``: the earlier
     run's flow the fluid starts with (decide_start_flow), if any."""
-    from fsi_orchestrator.case.timing import windows_per_period
+    from fsi_orchestrator.case.timing import case_schedule, windows_per_period
     from fsi_orchestrator.coupling_settings import CouplingSettings, scheme_settings
 
     c = case.coupling
+    explicit = c.explicit_periods * windows_per_period(case)
+    if c.explicit_until_periodic:  # every window, unless the periodic stop switches them
+        explicit = case_schedule(case)[1]
     scheme = scheme_settings(
         c.scheme,
         relaxation=c.relaxation,
         max_iterations=c.max_iterations,
         reuse_windows=c.reuse_windows,
         added_mass_scale=c.added_mass_scale,
-        explicit_windows=c.explicit_periods * windows_per_period(case),
+        explicit_windows=explicit,
     )
     return CouplingSettings(
         **lead_in(case, flow),

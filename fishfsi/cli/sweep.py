@@ -227,7 +227,8 @@ def transient_sweep(
                 print(
                     f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; running the "
                     "point again with iterated windows (coupling.scheme = "
-                    f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0)',
+                    f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0, '
+                    "coupling.explicit_until_periodic = false)",
                     file=sys.stderr,
                 )
                 folder.mkdir(parents=True, exist_ok=True)
@@ -330,10 +331,12 @@ def with_iterated_windows(case: Case) -> Case | None:
     c = case.coupling
     if case.fluid.model is not FluidModel.OPENFOAM and not c.partitioned:
         return None
-    if c.scheme.iterates and c.explicit_periods == 0:
+    if c.scheme.iterates and c.explicit_periods == 0 and not c.explicit_until_periodic:
         return None
     scheme = c.scheme if c.scheme.iterates else CouplingScheme.IQN_ILS_AM
-    coupling = dataclasses.replace(c, scheme=scheme, explicit_periods=0)
+    coupling = dataclasses.replace(
+        c, scheme=scheme, explicit_periods=0, explicit_until_periodic=False
+    )
     return dataclasses.replace(case, coupling=coupling)
 
 

@@ -146,10 +146,11 @@ class Command:
 
     def env(self) -> dict[str, str]:
         env = foam_env(self.cwd, parallel=self.processes > 1)
-        if self.gate is not None:
-            env[GATE_VARIABLE] = str(self.gate)
+        if self.gate is not None:  # absolute: OpenFOAM reads them from its case folder
+            env[GATE_VARIABLE] = str(self.gate.absolute())
         if self.handshake is not None:  # per process: all share one controlDict
-            env["FISHFSI_READY"], env["FISHFSI_GO"] = map(str, self.handshake)
+            ready, go = (path.absolute() for path in self.handshake)
+            env["FISHFSI_READY"], env["FISHFSI_GO"] = str(ready), str(go)
         return env
 
 

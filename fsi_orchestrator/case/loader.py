@@ -329,6 +329,23 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             f'"{c.scheme}"), whose quasi-Newton update keeps a Jacobian; remove it or '
             "change the scheme"
         )
+    if c.explicit_until_periodic:
+        if c.scheme is not CouplingScheme.IQN_ILS_AM:
+            raise CaseError(
+                'coupling.explicit_until_periodic applies to coupling.scheme = "iqn-ils-am" '
+                f'only (got "{c.scheme}"), which can iterate once the run is periodic; '
+                "remove it or change the scheme"
+            )
+        if t.periodic_tolerance is None:
+            raise CaseError(
+                "coupling.explicit_until_periodic needs time.periodic_tolerance (when the "
+                "explicit windows are periodic); set it, e.g. --set time.periodic_tolerance=0.01"
+            )
+        if c.explicit_periods > 0:
+            raise CaseError(
+                "coupling.explicit_until_periodic and coupling.explicit_periods both say when "
+                "the windows start to iterate; keep one of them"
+            )
     if c.explicit_periods > 0:
         if c.scheme is not CouplingScheme.IQN_ILS_AM:
             raise CaseError(

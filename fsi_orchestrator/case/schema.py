@@ -569,7 +569,7 @@ class Time:
         "dynamic with actuation: start on the periodic orbit an earlier run ended on (its "
         "output folder or checkpoint.h5; relative paths from the case folder), from its last "
         "state, instead of the fast model's orbit. An OpenFOAM run started from an OpenFOAM "
-        "run (both serial, the same tank, 8 or more windows per period) starts with that "
+        "run (serial or decomposed, the same tank, 8 or more windows per period) starts with that "
         "run's flow mapped onto its mesh and follows the orbit for one period before window "
         "0; otherwise its lead-in follows it for two periods from rest. It needs the same "
         "shell mesh and frequency and a run of whole periods; the fluid's mesh level or model "
@@ -751,6 +751,15 @@ class Coupling:
         "29 % less wall time; docs/coupling.md).",
         ge=0,
         le=10_000,
+    )
+    explicit_until_periodic: bool = param(
+        False,
+        "iqn-ils-am with time.periodic_tolerance: windows take one fluid solve (as "
+        "explicit-am) until the periods agree to 5 % (or the tolerance, if larger), then they "
+        "are iterated until the periods agree to the tolerance, so the figures a run ends "
+        "with are iterated windows'. One solve per window wanders by 1-2 % from period to "
+        "period where iterated windows settle to 0.1 % (coarse main job, docs/coupling.md). "
+        "A run that ends before it iterates (under 4 periods) says so.",
     )
     jacobian_from: str = param(
         "",
