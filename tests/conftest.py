@@ -12,6 +12,29 @@ from fsi_orchestrator.case.loader import case_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# the beam in the liquid, coupled partitioned to the potential flow with iqn-ils-am: a coupled
+# run of seconds (coupling, resume and periodic-stop tests)
+PARTITIONED_BEAM = """
+[geometry]
+kind = "beam"
+[actuation]
+frequency_hz = 5.0
+[time]
+periods = 1
+steps_per_period = 20
+[mesh]
+level = "coarse"
+[fluid]
+model = "potential"
+mesh_level = "coarse"
+[coupling]
+scheme = "iqn-ils-am"
+partitioned = true
+[output]
+vtk = false
+checkpoint_every = 3
+"""
+
 
 def _refuse(constant: str) -> Any:
     raise ValueError(f"not strict JSON: {constant}")

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from fsi_orchestrator.loop import AFRESH
+from tests.conftest import PARTITIONED_BEAM as BEAM
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -103,28 +104,6 @@ def test_an_explicit_start_up_is_explicit_am_and_then_iterates():
     assert started["solves"][:20] == [1.0] * 20
     assert min(started["solves"][20:]) >= 2 and started["unconverged"] == 0
     np.testing.assert_array_equal(started["tip_z_m"][:20], explicit["tip_z_m"])
-
-
-BEAM = """
-[geometry]
-kind = "beam"
-[actuation]
-frequency_hz = 5.0
-[time]
-periods = 1
-steps_per_period = 20
-[mesh]
-level = "coarse"
-[fluid]
-model = "potential"
-mesh_level = "coarse"
-[coupling]
-scheme = "iqn-ils-am"
-partitioned = true
-[output]
-vtk = false
-checkpoint_every = 3
-"""
 
 
 # the same 20 windows as two periods, the first one explicit: the resume crosses the switch

@@ -20,6 +20,7 @@ from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.loop import AFRESH
 from fsi_orchestrator.results import ResultsFile
 from solid_adapter.build import run_static
+from tests.conftest import PARTITIONED_BEAM
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -250,27 +251,10 @@ def test_a_run_does_not_end_as_periodic_during_its_explicit_start_up(tmp_path):
     assert said[31].startswith("periodic after 4 periods (time.periodic_tolerance = 0.01)")
 
 
-ADAPTIVE_BEAM = """
-[geometry]
-kind = "beam"
-[actuation]
-frequency_hz = 5.0
-[time]
-periods = 12
-steps_per_period = 10
-periodic_tolerance = 0.01
-[mesh]
-level = "coarse"
-[fluid]
-model = "potential"
-mesh_level = "coarse"
-[coupling]
-scheme = "iqn-ils-am"
-partitioned = true
-explicit_until_periodic = true
-[output]
-vtk = false
-"""
+ADAPTIVE_BEAM = PARTITIONED_BEAM.replace(
+    "periods = 1\nsteps_per_period = 20",
+    "periods = 12\nsteps_per_period = 10\nperiodic_tolerance = 0.01",
+).replace("partitioned = true", "partitioned = true\nexplicit_until_periodic = true")
 
 
 def test_explicit_windows_until_periodic_then_iterated_ones_and_a_resume_keeps_the_switch(
