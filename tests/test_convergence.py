@@ -251,7 +251,7 @@ def test_predictor_rules_change_mid_run_and_keep_their_scores():
     _orbit_history(p, x, 5, dt)
     assert p.rule == "constant"  # no period yet: the lowest order of the explicit rules
     _orbit_history_from(p, x, 5, n + 5, dt)
-    assert p.rule == "period"
+    assert p.rule == "period-smooth"
     p.use_rules(PERIODIC_RULES)
     assert p.rule in ("period", "period-linear") and np.isfinite(p.rule_errors).all()
     t = (n + 5) * dt
@@ -263,3 +263,48 @@ def test_predictor_rules_change_mid_run_and_keep_their_scores():
 def _orbit_history_from(p: Predictor, x, first: int, last: int, dt: float) -> None:
     for k in range(first, last):
         p.record(k * dt, {"f": x(k * dt)})
+
+
+def test_the_explicit_period_rule_does_not_feed_back_last_periods_window_to_window_wobble():
+    """One solve per window feeds the prediction straight into the structure. The plain period
+    rule x_n + x_m - x_{m-1} (t_m = t - T) copies a window-to-window (Nyquist) wobble of the
+    last period into this one at twice its size; with OpenFOAM such bursts came back at the
+    same phase every period (docs/coupling.md). The smoothed rule drops it and misses a clean
+    orbit by (w dt)^4 / 16 of each harmonic's step."""
+    period, n = 1 / 3, 40
+    dt, w, eps = period / n, 2 * np.pi * 3, 0.05
+
+    def x(t):
+        return np.array([np.sin(w * t) + 0.3 * np.sin(3 * w * t)])
+
+    def wobbly(k):  # the last period wobbles around window 10, the one predicted is window 50
+        return x(k * dt) + (eps * (-1) ** k if 6 <= k <= 14 else 0.0)
+
+    def predictor(rule):
+        p = Predictor("periodic", period=period, rules=(rule,))
+        for k in range(n + 10):
+            p.record(k * dt, {"f": wobbly(k)})
+        return p
+
+    t = (n + 10) * dt
+    plain, smooth = (predictor(r).predict(t)["f"][0] - x(t)[0] for r in ("period", "period-smooth"))
+    assert abs(abs(plain) - 2 * eps) < 1e-12
+
+    # a harmonic a sin(h w t) steps by 2 a sin(h w dt / 2) per window; the filter
+    # [-1, 4, 10, 4, -1] / 16 keeps H = (10 + 8 cos(h w dt) - 2 cos(2 h w dt)) / 16 of it
+    def lost(theta):
+        return 1 - (10 + 8 * np.cos(theta) - 2 * np.cos(2 * theta)) / 16
+
+    bound = sum(a * 2 * np.sin(h * w * dt / 2) * lost(h * w * dt) for a, h in ((1.0, 1), (0.3, 3)))
+    assert 0 < abs(smooth) <= bound
+    # on the clean orbit as well
+    p = Predictor("periodic", period=period, rules=EXPLICIT_RULES)
+    _orbit_history(p, x, n + 10, dt)
+    assert p.rule == "period-smooth"
+    assert abs(p.predict(t)["f"][0] - x(t)[0]) <= bound < 1e-3
+    # a checkpoint written before the rule existed (five rule scores) still loads
+    state = p.save_state()
+    state["predictor_all_rule_errors"] = state["predictor_all_rule_errors"][:5]
+    q = Predictor("periodic", period=period, rules=EXPLICIT_RULES)
+    q.load_state(state)
+    assert q.rule == "constant"  # the new rule is scored from the next recorded window
