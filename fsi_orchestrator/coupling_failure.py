@@ -106,8 +106,9 @@ class FailureHandling:
                 f"and grew from {first:.3g} to {norm:.3g} N: one fluid solve per window is "
                 f'unstable here (coupling.scheme = "{self.scheme}"); iterate the windows '
                 '(coupling.scheme = "iqn-ils-am" with coupling.explicit_periods = 0 and '
-                "coupling.explicit_until_periodic = false) or take "
-                "more time.steps_per_period",
+                "coupling.explicit_until_periodic = false), or take fewer "
+                "time.steps_per_period: longer windows steady one solve per window, shorter "
+                "ones unsettle it",
                 field=self.field,
                 window=window,
                 iteration=iteration,
