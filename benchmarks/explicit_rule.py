@@ -23,6 +23,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from fishfsi.cli.run import period_amplitudes, period_means
+
 ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases" / "fixed_head_3Hz"
 WINDOWS = 40  # the case's steps per period
@@ -38,9 +40,10 @@ sys.exit(main({args!r}))
 
 def fsi_run(rules: tuple[str, ...], args: list[str], log: Path) -> subprocess.Popen:
     code = LAUNCH.format(rules=rules, args=args)
-    return subprocess.Popen(
-        [sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=log.open("w")
-    )
+    with log.open("w") as stderr:  # the child keeps its own copy of the descriptor
+        return subprocess.Popen(
+            [sys.executable, "-c", code], stdout=subprocess.DEVNULL, stderr=stderr
+        )
 
 
 def per_period(folder: Path) -> dict[str, list[float]]:
@@ -52,14 +55,14 @@ def per_period(folder: Path) -> dict[str, list[float]]:
     n = len(tip) // WINDOWS
     periods = [slice(k * WINDOWS, (k + 1) * WINDOWS) for k in range(n)]
     swing = (force[-WINDOWS:].max() - force[-WINDOWS:].min()) / 2
-    # the lateral force's departure from the mean of its neighbours, over its swing: a smooth
-    # 3 Hz force gives 1 - cos(2 pi / 40) = 0.012 of it at most, a burst more
+    # the lateral force's departure from the mean of its neighbours, over its swing: a pure
+    # 3 Hz sine gives 1 - cos(2 pi / 40) = 0.012 at most (harmonics add to it), a burst more
     bump = np.abs(force[1:-1] - (force[:-2] + force[2:]) / 2) / swing
     return {
-        "tail_mm": [1e3 * (tip[p].max() - tip[p].min()) / 2 for p in periods],
-        "thrust_mn": [1e3 * float(thrust[p].mean()) for p in periods],
+        "tail_mm": [1e3 * a for a in period_amplitudes(tip, WINDOWS)],
+        "thrust_mn": [1e3 * m for m in period_means(thrust, WINDOWS)],
         "burst": [float(bump[max(p.start - 1, 0) : p.stop - 1].max()) for p in periods],
-        "wall_s_per_window": [float(wall[p].mean()) for p in periods],
+        "wall_s_per_window": period_means(wall, WINDOWS),
     }
 
 
