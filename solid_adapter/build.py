@@ -8,11 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from fsi_orchestrator.case import Case
+from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.schema import GeometryKind, StartMode
 
 from .buckling import check_mean_voltage
-from .feedback import PeriodicFeedback
+from .feedback import PeriodicFeedback, mirror_asymmetry, mirror_signs
 from .geometry import build_layout
 from .harmonic import (
     ModalCorrection,
@@ -135,14 +135,46 @@ def bending_frequencies(model: ShellModel, count: int) -> NDArray:
     return np.array(found[:count])
 
 
-def periodic_feedback(case: Case) -> PeriodicFeedback | None:
-    """time.periodic_feedback_per_s as the structure's delayed feedback (None: off)."""
+def periodic_feedback(case: Case, model: ShellModel) -> PeriodicFeedback | None:
+    """time.periodic_feedback_per_s as the structure's delayed feedback (None: off), with the
+    mirrored half-period term where time.periodic_feedback_mirror asks for it."""
     gain = case.time.periodic_feedback_per_s
     if not gain or not has_actuators(case):
         return None
     steps = case.time.steps_per_period
     ramp = round(case.actuation.ramp_periods * steps)
-    return PeriodicFeedback(gain, steps, first_step=ramp)
+    mirror = None
+    if case.time.periodic_feedback_mirror:
+        check_mirror_symmetry(case, model)
+        mirror = mirror_signs(model)
+    return PeriodicFeedback(gain, steps, first_step=ramp, mirror=mirror)
+
+
+# r(S x, swap V) against S r(x, V): round-off on a symmetric laminate is ~1e-15
+MIRROR_TOLERANCE = 1e-8
+
+
+def check_mirror_symmetry(case: Case, model: ShellModel) -> None:
+    """time.periodic_feedback_mirror assumes the structure is its own mirror image with the
+    actuators swapped (the drive's antisymmetry the loader checks); say so where it is not."""
+    loads = static_loads(case, model)
+    asymmetry = mirror_asymmetry(
+        model, DriveSignal.from_case(case).volts(0.25 / case.actuation.frequency_hz)
+    )
+    lateral = (
+        np.abs(mirror_signs(model) * loads.edge - loads.edge).max() > 0 or loads.pressure_pa != 0
+    )
+    if asymmetry > MIRROR_TOLERANCE or lateral:
+        what = (
+            "lateral loads (loads.*)"
+            if lateral
+            else f"a laminate {asymmetry:.1e} off its mirror image"
+        )
+        raise CaseError(
+            f"time.periodic_feedback_mirror: the structure is not symmetric about the plate's "
+            f"plane ({what}), so its periodic motion is not its own mirror image half a period "
+            f"later; set it to false"
+        )
 
 
 def build_integrator(
@@ -165,7 +197,7 @@ def build_shell_participant(
     (``start``, time.start_from) on the orbit an earlier run recorded, from its end state."""
     model = model or build_shell_model(case)
     loads = static_loads(case, model)
-    feedback = periodic_feedback(case)
+    feedback = periodic_feedback(case, model)
     integrator = build_integrator(case, model, feedback)
     if not has_actuators(case):
         return ShellParticipant(model, integrator, lambda t: np.zeros(2), loads)

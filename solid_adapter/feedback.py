@@ -10,6 +10,14 @@ g (1 - cos(2 pi f_m T)) / (4 pi f_m) (small g): the most at f_m = (k + 1/2) / T,
 drive's harmonics. The coupled start-up's slow beat (docs/coupling.md, "Periodic state") is
 such a motion.
 
+A fish whose two actuators get the same waveform in opposite senses is symmetric in space and
+time: its periodic motion mirrored through the plate's plane is the motion half a period later,
+v(t) = S v(t - T/2) with S the mirror (u_z, theta_1, theta_2 change sign). ``mirror`` adds the
+force -g M (v(t) - S v(t - T/2)) (equivariant Pyragas control: Fiedler et al. 2007, Phys. Rev.
+Lett. 98, 114101). It is zero on that orbit too, and it damps a free lateral motion at f_m with
+g (1 + cos(pi f_m T)) / (4 pi f_m): the most at the drive's even harmonics (a mode near twice the
+drive, a drifting mean position), where the period's own term damps nothing.
+
 The velocities one period back are the structure's accepted window starts, recorded by the
 participant. A run started on a periodic orbit takes the period before t = 0 from that orbit;
 a start from rest has no reference, and no force, until a period (after a ramp, a period past
@@ -34,17 +42,30 @@ class PeriodicFeedback:
 
     amplitude_dependent = False
 
-    def __init__(self, gain_per_s: float, steps_per_period: int, first_step: int = 0) -> None:
+    def __init__(
+        self,
+        gain_per_s: float,
+        steps_per_period: int,
+        first_step: int = 0,
+        mirror: NDArray | None = None,
+    ) -> None:
         """``first_step``: the earliest step a reference may come from (a ramped drive's ramp
-        is no period to come back to)."""
+        is no period to come back to). ``mirror``: the signs of S per unknown, for the
+        half-period term (needs an even steps_per_period)."""
         if not (np.isfinite(gain_per_s) and gain_per_s >= 0):
             raise ValueError(f"the feedback gain must be finite and >= 0, got {gain_per_s!r}")
         if steps_per_period < 1:
             raise ValueError(f"steps_per_period must be >= 1, got {steps_per_period!r}")
+        if mirror is not None and steps_per_period % 2:
+            raise ValueError(
+                f"the mirrored term needs an even steps_per_period, got {steps_per_period}"
+            )
         self.gain = float(gain_per_s)
         self.steps_per_period = int(steps_per_period)
         self.first_step = int(first_step)
-        self.reference: NDArray | None = None  # v(t_end - T) of the step being solved
+        self.mirror = None if mirror is None else np.asarray(mirror, dtype=float)
+        # the step being solved's references for its end: v(t - T), and S v(t - T/2)
+        self.references: list[NDArray] = []
         self._history: dict[int, NDArray] = {}  # step index -> velocity at its start
 
     def seed(self, velocity_at_step: Callable[[int], NDArray], first: int = 0) -> None:
@@ -55,8 +76,7 @@ class PeriodicFeedback:
         self.forget()
         for k in range(first - self.steps_per_period, first):
             self._history[k] = np.array(velocity_at_step(k), dtype=float)
-        in_ramp = 0 <= first - self.steps_per_period < self.first_step
-        self.reference = None if in_ramp else self._history[first - self.steps_per_period]
+        self.references = self._references_for(first)
 
     def prepare(self, step: int, v_start: NDArray) -> None:
         """Before solving step ``step`` (from t_step to t_step+1): record the velocity at its
@@ -65,9 +85,20 @@ class PeriodicFeedback:
         self._history[step] = v_start.copy()
         for old in [k for k in self._history if k < step - self.steps_per_period]:
             del self._history[old]
-        back = step + 1 - self.steps_per_period
-        in_ramp = 0 <= back < self.first_step
-        self.reference = None if in_ramp else self._history.get(back)
+        self.references = self._references_for(step + 1)
+
+    def _references_for(self, step: int) -> list[NDArray]:
+        """The recorded references for the state at the start of ``step``, none from a ramp."""
+        out = []
+        delays = [self.steps_per_period]
+        if self.mirror is not None:
+            delays.append(self.steps_per_period // 2)
+        for delay in delays:
+            back = step - delay
+            v = None if 0 <= back < self.first_step else self._history.get(back)
+            if v is not None:
+                out.append(v if delay == self.steps_per_period else self.mirror * v)
+        return out
 
     def history(self) -> tuple[NDArray, NDArray]:
         """(step indices, velocities at their starts) recorded so far, for a checkpoint."""
@@ -85,14 +116,38 @@ class PeriodicFeedback:
     def forget(self) -> None:
         """Drop the history (a resumed or restarted run records a period again)."""
         self._history.clear()
-        self.reference = None
+        self.references = []
 
     def force(self, model: ShellModel, x: NDArray, v: NDArray) -> tuple[NDArray, sp.spmatrix]:
-        if self.reference is None or self.gain == 0:
+        if not self.references or self.gain == 0:
             return np.zeros_like(v), sp.csr_matrix((v.size, v.size))
         C = self.gain * model.inertia
-        return C @ (v - self.reference), C
+        return C @ (len(self.references) * v - sum(self.references)), len(self.references) * C
 
     def linear(self, model: ShellModel, orbit=None) -> sp.spmatrix:
         """Zero: a periodic response does not feel it."""
         return sp.csr_matrix((model.ndof, model.ndof))
+
+
+def mirror_signs(model: ShellModel) -> NDArray:
+    """S per unknown: the mirror through the plate's plane flips u_z and the rotation vector
+    (u_x, u_y, u_z, theta_1, theta_2 -> u_x, u_y, -u_z, -theta_1, -theta_2)."""
+    return np.tile([1.0, 1.0, -1.0, -1.0, -1.0], model.n_nodes)
+
+
+def mirror_asymmetry(model: ShellModel, volts: NDArray, seed: int = 0) -> float:
+    """How far the shell is from mirror symmetry with its actuators swapped: the larger
+    relative difference of S r(x, V) and r(S x, swap V) for the drive alone (x = 0) and for a
+    random state of small rotations without it (0 for a laminate symmetric about its
+    mid-plane with its two actuators alike)."""
+    S = mirror_signs(model)
+    x = 1e-3 * np.random.default_rng(seed).standard_normal(model.ndof) * model.free_dofs
+    volts = np.asarray(volts, dtype=float)
+    out = 0.0
+    for state, v in ((np.zeros(model.ndof), volts), (x, np.zeros(2))):
+        r = model.internal(state, v, tangent=False)[0][model.free_dofs]
+        r_mirror = model.internal(S * state, v[::-1], tangent=False)[0][model.free_dofs]
+        size = np.linalg.norm(r)
+        if size > 0:
+            out = max(out, float(np.linalg.norm(S[model.free_dofs] * r - r_mirror) / size))
+    return out

@@ -71,7 +71,32 @@ def test_the_feedback_is_the_velocitys_change_over_a_period_times_g_m():
     ramped = PeriodicFeedback(2.0, steps_per_period=3, first_step=3)
     for step in range(6):
         ramped.prepare(step, history[step])
-        assert (ramped.reference is None) == (step < 5)
+        assert (not ramped.references) == (step < 5)
+
+
+def test_the_mirrored_term_feeds_back_the_mirror_image_half_a_period_back():
+    """Exact: with ``mirror`` the force is g M (2 v - v(t - T) - S v(t - T/2)); zero on a
+    motion that repeats every period and is its own mirror image half a period later; each
+    term starts once its reference is recorded."""
+    S = np.array([1.0, -1.0, -1.0])
+    feedback, model = PeriodicFeedback(2.0, steps_per_period=4, mirror=S), _Model()
+    a, b = np.array([1.0, 2.0, 3.0]), np.array([0.5, -1.0, 4.0])
+    orbit = [a, b, S * a, S * b] * 3  # v(t + T/2) = S v(t)
+    feedback.prepare(0, orbit[0])
+    assert not np.any(feedback.force(model, None, np.ones(3))[0])
+    feedback.prepare(1, orbit[1])  # the mirrored reference (step 0) exists, the period's not
+    v = np.array([1.0, 1.0, 1.0])
+    force, tangent = feedback.force(model, None, v)
+    np.testing.assert_array_equal(force, 2.0 * model.inertia @ (v - S * orbit[0]))
+    np.testing.assert_array_equal(tangent.toarray(), 2.0 * model.inertia.toarray())
+    for step in range(2, 9):
+        feedback.prepare(step, orbit[step])
+        assert not np.any(feedback.force(model, None, orbit[step + 1])[0])
+    force, tangent = feedback.force(model, None, v)
+    np.testing.assert_array_equal(force, 2.0 * model.inertia @ (2 * v - orbit[5] - S * orbit[7]))
+    np.testing.assert_array_equal(tangent.toarray(), 4.0 * model.inertia.toarray())
+    with pytest.raises(ValueError, match="even"):
+        PeriodicFeedback(2.0, steps_per_period=5, mirror=S)
 
 
 @pytest.mark.parametrize("gain", [-1.0, float("nan")])
@@ -120,6 +145,43 @@ def test_a_feedback_without_a_period_or_on_the_mid_step_velocity_is_refused(tmp_
     (tmp_path / "beam" / "case.toml").write_text(BEAM)
     with pytest.raises(CaseError, match="time.periodic_feedback_per_s"):
         load_case(tmp_path / "beam", [*sets, "time.periodic_feedback_per_s=5"])
+
+
+@pytest.mark.parametrize(
+    ("sets", "message"),
+    [
+        ([], "time.periodic_feedback_per_s > 0"),
+        (["time.periodic_feedback_per_s=5", "time.steps_per_period=21"], "21 is odd"),
+        (
+            ["time.periodic_feedback_per_s=5", "actuation.right_volts=[-500, 500]"],
+            "left_volts and right_volts differ",
+        ),
+    ],
+)
+def test_a_mirrored_feedback_without_the_symmetry_is_refused(sets, message):
+    """A turning drive, an odd number of steps per period, or no feedback to be a term of."""
+    with pytest.raises(CaseError, match=message):
+        load_case("cases/fixed_head_3Hz", [*sets, "time.periodic_feedback_mirror=true"])
+
+
+def test_a_laminate_that_is_not_its_own_mirror_image_is_refused(tmp_path):
+    """The seed's beam has one MFC on one side: the mirror term would push it off its orbit."""
+    from solid_adapter.build import build_shell_model, periodic_feedback
+
+    (tmp_path / "beam").mkdir()
+    (tmp_path / "beam" / "case.toml").write_text(BEAM)
+    case = load_case(tmp_path / "beam", ["time.periodic_feedback_per_s=5"])
+    assert periodic_feedback(case, build_shell_model(case)).mirror is None
+    case = load_case(
+        tmp_path / "beam", ["time.periodic_feedback_per_s=5", "time.periodic_feedback_mirror=true"]
+    )
+    with pytest.raises(CaseError, match="time.periodic_feedback_mirror: .* laminate"):
+        periodic_feedback(case, build_shell_model(case))
+    fish = load_case(
+        "cases/fixed_head_3Hz",
+        ["time.periodic_feedback_per_s=5", "time.periodic_feedback_mirror=true"],
+    )
+    assert periodic_feedback(fish, build_shell_model(fish)).mirror is not None
 
 
 def test_a_resumed_run_feeds_back_as_the_uninterrupted_one(tmp_path, capsys):

@@ -305,6 +305,20 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             '"newmark": the energy-conserving rule damps with the mid-step velocity, against '
             "which the feedback is not zero on a periodic motion"
         )
+    if t.periodic_feedback_mirror:
+        why = None
+        if not t.periodic_feedback_per_s:
+            why = "it is a term of the delayed feedback: set time.periodic_feedback_per_s > 0"
+        elif t.steps_per_period % 2:
+            n = t.steps_per_period
+            why = f"half a period must be whole steps: time.steps_per_period = {n} is odd"
+        elif tuple(case.actuation.left_volts) != tuple(case.actuation.right_volts):
+            why = (
+                "actuation.left_volts and right_volts differ, so the motion half a period later is "
+                "not the mirror image (a turning drive): set it to false"
+            )
+        if why:
+            raise CaseError(f"time.periodic_feedback_mirror: {why}")
     if t.start_from:
         if case.geometry.kind is GeometryKind.RECTANGLE:
             raise CaseError(

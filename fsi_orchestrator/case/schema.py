@@ -559,6 +559,15 @@ class Time:
         ge=0,
         le=1e4,
     )
+    periodic_feedback_mirror: bool = param(
+        False,
+        "with time.periodic_feedback_per_s: also feed back the mirror image of the motion half "
+        "a period earlier, f = -g M (v(t) - S v(t - T/2)), S the mirror through the plate's "
+        "plane. A fish whose two actuators get the same voltages in opposite senses repeats "
+        "its motion mirrored every half period, so this too is zero on the periodic state; it "
+        "damps what the period's term cannot, such as a mode near twice the drive. Needs "
+        "time.steps_per_period even and actuation.left_volts = right_volts (docs/coupling.md).",
+    )
     start: StartMode = param(
         StartMode.PERIODIC,
         "dynamic with actuation: start on the linear periodic response (no start-up "
