@@ -207,6 +207,71 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     assert json.loads(capsys.readouterr().out)["rows"][1]["status"] == "ok (iterated windows)"
 
 
+@pytest.mark.slow
+def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
+    tmp_path, capsys, monkeypatch
+):
+    """Longer windows steady one solve per window (explicit-am at 15-25 Hz): a point whose
+    windows diverge is rerun with each of coupling.explicit_fallback_windows below its own
+    count in turn; its row names the count; a higher frequency starts at that count; --resume
+    continues the rerun it was on; where every count diverges, the windows are iterated at
+    the point's own count."""
+    from fsi_orchestrator.case.schema import CouplingScheme
+    from fsi_orchestrator.convergence import CouplingDivergenceError
+
+    real = run_cli.run_dynamic
+    runs = []
+    stable_below = {"8": 6}  # windows per period that run, by frequency
+
+    def unstable(case, output, **kwargs):
+        c, n = case.coupling, case.time.steps_per_period
+        runs.append((case.actuation.frequency_hz, c.scheme, n, kwargs["resume"]))
+        limit = stable_below.get(f"{case.actuation.frequency_hz:g}", 100)
+        if not c.scheme.iterates and n > limit:
+            real(case, output, **kwargs)
+            raise CouplingDivergenceError(
+                "the interface force flipped sign", field="force", window=3, iteration=1
+            )
+        return real(case, output, **kwargs)
+
+    monkeypatch.setattr(run_cli, "run_dynamic", unstable)
+    out = tmp_path / "sweep"
+    args = [str(CASE), "--frequencies", "2,8,9", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=10"]
+    args += ["--set", "coupling.partitioned=true", "--set", "coupling.scheme=explicit-am"]
+    args += ["--set", "coupling.explicit_fallback_windows=[12, 8, 6]"]
+    assert sweep_cli.main([*args, "--json", "--output", str(out)]) == 0
+    captured = capsys.readouterr()
+    rows = json.loads(captured.out)["rows"]
+    assert [r["status"] for r in rows] == ["ok", *["ok (6 windows per period)"] * 2]
+    assert [r["windows_per_period"] for r in rows] == [10, 6, 6]
+    explicit, iqn = CouplingScheme.EXPLICIT_AM, CouplingScheme.IQN_ILS_AM
+    assert runs == [(2.0, explicit, 10, False), (8.0, explicit, 10, False)] + [
+        (8.0, explicit, 8, False),
+        (8.0, explicit, 6, False),
+        (9.0, explicit, 6, False),  # 9 Hz would run at 10 here; it starts where 8 Hz ran
+    ]
+    assert "again with 8 windows per period" in captured.err
+    assert (out / "sine_8Hz" / sweep_cli.WINDOWS_MARK).read_text().startswith("6\n")
+    # killed in its rerun: --resume continues that rerun's checkpoint at its count
+    (out / "sweep_rows" / "sine_8Hz.json").unlink()
+    runs.clear()
+    assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
+    assert runs == [(8.0, explicit, 6, True)]
+    assert json.loads(capsys.readouterr().out)["rows"][1]["status"] == "ok (6 windows per period)"
+    # every count diverges: iterated at the point's own count
+    stable_below["8"] = 4
+    assert sweep_cli.main([*args, "--json", "--output", str(out), "--overwrite"]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert rows[1]["status"] == "ok (iterated windows)"
+    assert [(r[1], r[2]) for r in runs if r[0] == 8.0][-4:] == [
+        (explicit, 10),
+        (explicit, 8),
+        (explicit, 6),
+        (iqn, 10),
+    ]
+
+
 def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():
     from fsi_orchestrator.case.schema import CouplingScheme
 
@@ -225,6 +290,18 @@ def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():
     )
     plain = load_case(CASE, ["coupling.partitioned=true", "coupling.scheme=explicit"])
     assert sweep_cli.with_iterated_windows(plain).coupling.scheme is CouplingScheme.IQN_ILS_AM
+    # reruns with fewer windows: one-solve schemes only, counts below the case's own
+    forty = load_case(
+        CASE, ["coupling.partitioned=true", "coupling.scheme=explicit", "time.steps_per_period=40"]
+    )
+    assert [c.time.steps_per_period for c in sweep_cli.with_fewer_windows(forty)] == [30, 20]
+    for iterating in (case, partitioned, started):
+        assert sweep_cli.with_fewer_windows(iterating) == []
+    short = load_case(
+        CASE,
+        ["coupling.partitioned=true", "coupling.scheme=explicit-am", "time.steps_per_period=24"],
+    )
+    assert [c.time.steps_per_period for c in sweep_cli.with_fewer_windows(short)] == [20]
 
 
 @pytest.mark.parametrize("text, expected", [("1:5:2", [1.0, 3.0, 5.0]), ("3,10", [3.0, 10.0])])

@@ -18,9 +18,10 @@ killed transient point from its checkpoint (its run folder is ``OUTPUT/<waveform
 Without ``--resume`` a folder holding a sweep's results is refused (``--overwrite`` replaces
 them); ``--point K`` (an array task) is refused only by another case's sweep there or by its
 own point's row or run, not by its siblings' rows.
-A point whose windows of one fluid solve diverge (explicit-am on the coarse fish: a sine above
-15 Hz, a square wave's steps) is rerun with iterated windows (with_iterated_windows; its
-status says so).
+A point whose windows of one fluid solve diverge (explicit-am: a sine above 13-15 Hz, a
+square wave's steps) is rerun with longer windows (with_fewer_windows,
+coupling.explicit_fallback_windows) and, where those diverge too, with iterated windows
+(with_iterated_windows); its status says which.
 One line per finished point goes to stderr (``--quiet``: none).
 """
 
@@ -197,6 +198,7 @@ def transient_sweep(
     mine = []
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
     learned_iterated = None  # the same, of the last point rerun with iterated windows
+    steady: dict[Waveform, tuple[float, int]] = {}  # (f, windows per period) it ran with
     for index in range(rank, len(jobs), size):
         waveform, f = jobs[index]
         folder = output / point_name(waveform, f)
@@ -209,37 +211,65 @@ def transient_sweep(
         iterated = with_iterated_windows(point)
         if iterated is not None and learned_iterated is not None:
             iterated = chained(iterated, learned_iterated)
-        if not resume:  # an earlier sweep's mark (--overwrite) says nothing of this run
+        # one solve per window steadies with longer windows: those tried before iterating;
+        # a higher frequency of the same waveform starts at the count a lower one needed
+        attempts = [point, *with_fewer_windows(point)]
+        needed = steady.get(waveform)
+        if needed is not None and f > needed[0]:
+            attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
+        if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
             (folder / ITERATED_MARK).unlink(missing_ok=True)
+            (folder / WINDOWS_MARK).unlink(missing_ok=True)
         redone = False
         if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
-            point, iterated, redone = iterated, None, True  # its run was already redone
+            attempts, iterated, redone = [iterated], None, True  # its run was already redone
+        elif resume and (folder / WINDOWS_MARK).is_file():  # it was rerun with fewer windows
+            marked = int((folder / WINDOWS_MARK).read_text().split()[0])
+            attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
             continued = resume and (folder / CHECKPOINT_FILE).is_file()
             notes = []
-            try:
-                summary = run_or_afresh(point, folder, continued)
-            except (CouplingDivergenceError, MeshFoldedError) as err:
-                if iterated is None:
-                    raise
-                # one solve per window is unstable at this point (explicit added-mass
-                # instability, or a solver failing on its growing force): iterate its windows
-                print(
-                    f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; running the "
-                    "point again with iterated windows (coupling.scheme = "
-                    f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0, '
-                    "coupling.explicit_until_periodic = false)",
-                    file=sys.stderr,
-                )
-                folder.mkdir(parents=True, exist_ok=True)
-                # the explicit run's checkpoint must not be continued as the rerun's
-                (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
-                atomic_write(folder / ITERATED_MARK, f"{err}\n")
-                summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
-                redone = True
+            for k, attempt in enumerate(attempts):
+                try:
+                    summary = run_or_afresh(attempt, folder, continued and k == 0)
+                    break
+                except (CouplingDivergenceError, MeshFoldedError) as err:
+                    if k + 1 < len(attempts):
+                        n = attempts[k + 1].time.steps_per_period
+                        print(
+                            f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; "
+                            f"running the point again with {n} windows per period "
+                            "(time.steps_per_period; coupling.explicit_fallback_windows)",
+                            file=sys.stderr,
+                        )
+                        folder.mkdir(parents=True, exist_ok=True)
+                        (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
+                        atomic_write(folder / WINDOWS_MARK, f"{n}\n{err}\n")
+                        continue
+                    if iterated is None:
+                        raise
+                    # one solve per window is unstable at this point (explicit added-mass
+                    # instability, or a solver failing on its growing force): iterate its
+                    # windows
+                    print(
+                        f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; running "
+                        "the point again with iterated windows (coupling.scheme = "
+                        f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0, '
+                        "coupling.explicit_until_periodic = false)",
+                        file=sys.stderr,
+                    )
+                    folder.mkdir(parents=True, exist_ok=True)
+                    # the explicit run's checkpoint must not be continued as the rerun's
+                    (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
+                    atomic_write(folder / ITERATED_MARK, f"{err}\n")
+                    summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
+                    redone = True
             if redone:
                 notes.append("iterated windows")
                 learned_iterated = folder
+            elif attempt is not point:
+                notes.append(f"{attempt.time.steps_per_period} windows per period")
+                steady[waveform] = (f, attempt.time.steps_per_period)
             if "start_from_rest" in summary:
                 notes.insert(0, "started from rest")
             status = f"ok ({'; '.join(notes)})" if notes else "ok"
@@ -260,6 +290,7 @@ def transient_sweep(
             "mean_thrust_n": summary.get("mean_thrust_n", nan),
             "thrust_source": summary.get("thrust_source", ""),
             "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
+            "windows_per_period": summary.get("windows_per_period", nan),
             "mean_fluid_solves_per_window": summary.get(
                 "mean_fluid_solves_per_window", 1.0 if summary else float("nan")
             ),
@@ -290,6 +321,24 @@ def transient_sweep(
 
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
+WINDOWS_MARK = "fewer_windows.txt"  # in a point's folder: rerun with these windows per period
+
+
+def with_fewer_windows(case: Case) -> list[Case]:
+    """The point's case with each of coupling.explicit_fallback_windows below its own
+    time.steps_per_period, in order: the reruns of a point whose windows of one fluid solve
+    diverge, before its windows are iterated. None for an iterating scheme (also one with
+    explicit start-up periods: its iterated figures would change with the time step), a
+    coupling without a partitioned fluid, or a time step given in seconds."""
+    c, t = case.coupling, case.time
+    if with_iterated_windows(case) is None or t.step_s is not None:
+        return []
+    if c.scheme.iterates:  # an iterated run's figures would change with its time step
+        return []
+    counts = [n for n in c.explicit_fallback_windows if n < t.steps_per_period]
+    return [
+        dataclasses.replace(case, time=dataclasses.replace(t, steps_per_period=n)) for n in counts
+    ]
 
 
 def started_from(case: Case, source: Path, ndof: int) -> Case:
