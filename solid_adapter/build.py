@@ -168,7 +168,7 @@ def check_mirror_symmetry(case: Case, model: ShellModel) -> None:
         what = (
             "lateral loads (loads.*)"
             if lateral
-            else f"a laminate {asymmetry:.1e} off its mirror image"
+            else f"a laminate or masses {asymmetry:.1e} off their mirror image"
         )
         raise CaseError(
             f"time.periodic_feedback_mirror: the structure is not symmetric about the plate's "

@@ -13,16 +13,16 @@ such a motion.
 A fish whose two actuators get the same waveform in opposite senses is symmetric in space and
 time: its periodic motion mirrored through the plate's plane is the motion half a period later,
 v(t) = S v(t - T/2) with S the mirror (u_z, theta_1, theta_2 change sign). ``mirror`` adds the
-force -g M (v(t) - S v(t - T/2)) (equivariant Pyragas control: Fiedler et al. 2007, Phys. Rev.
-Lett. 98, 114101). It is zero on that orbit too, and it damps a free lateral motion at f_m with
+force -g M (v(t) - S v(t - T/2)) (half-period delayed feedback: Nakajima and Ueda 1998, Phys.
+Rev. E 58, 1757). It is zero on that orbit too, and it damps a free lateral motion at f_m with
 g (1 + cos(pi f_m T)) / (4 pi f_m): the most at the drive's even harmonics (a mode near twice the
 drive, a drifting mean position), where the period's own term damps nothing.
 
 The velocities one period back are the structure's accepted window starts, recorded by the
 participant. A run started on a periodic orbit takes the period before t = 0 from that orbit;
-a start from rest has no reference, and no force, until a period (after a ramp, a period past
-the ramp) has been recorded. A window retried in sub-steps (a failed Newton) uses the window
-end's reference in each of them.
+a start from rest has no reference, and no force, until a period (the mirrored term: half a
+period) has been recorded, none of it inside a ramp. A window retried in sub-steps (a failed
+Newton) uses the window end's references in each of them.
 """
 
 from __future__ import annotations
@@ -81,7 +81,8 @@ class PeriodicFeedback:
     def prepare(self, step: int, v_start: NDArray) -> None:
         """Before solving step ``step`` (from t_step to t_step+1): record the velocity at its
         start (a repeated solve of the same step records the same state) and take the
-        reference for its end, one period back (None where none was recorded or seeded)."""
+        references for its end: one period back and, with ``mirror``, the mirror image half a
+        period back (each left out where it was not recorded or seeded, or lies in a ramp)."""
         self._history[step] = v_start.copy()
         for old in [k for k in self._history if k < step - self.steps_per_period]:
             del self._history[old]
@@ -136,10 +137,10 @@ def mirror_signs(model: ShellModel) -> NDArray:
 
 
 def mirror_asymmetry(model: ShellModel, volts: NDArray, seed: int = 0) -> float:
-    """How far the shell is from mirror symmetry with its actuators swapped: the larger
+    """How far the shell is from mirror symmetry with its actuators swapped: the largest
     relative difference of S r(x, V) and r(S x, swap V) for the drive alone (x = 0) and for a
-    random state of small rotations without it (0 for a laminate symmetric about its
-    mid-plane with its two actuators alike)."""
+    random state of small rotations without it, and of S M S and M (0 for a laminate and
+    masses symmetric about its mid-plane with its two actuators alike)."""
     S = mirror_signs(model)
     x = 1e-3 * np.random.default_rng(seed).standard_normal(model.ndof) * model.free_dofs
     volts = np.asarray(volts, dtype=float)
@@ -150,4 +151,8 @@ def mirror_asymmetry(model: ShellModel, volts: NDArray, seed: int = 0) -> float:
         size = np.linalg.norm(r)
         if size > 0:
             out = max(out, float(np.linalg.norm(S[model.free_dofs] * r - r_mirror) / size))
+    M = model.inertia  # with the liquid's added mass where the model carries it
+    if M.nnz:
+        mirrored = sp.diags(S) @ M @ sp.diags(S) - M
+        out = max(out, float(abs(mirrored).max() / abs(M).max()))
     return out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import re
 from pathlib import Path
@@ -253,12 +254,15 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     ]
     assert "again with 8 windows per period" in captured.err
     assert (out / "sine_8Hz" / sweep_cli.WINDOWS_MARK).read_text().startswith("6\n")
-    # killed in its rerun: --resume continues that rerun's checkpoint at its count
+    # killed in its rerun (and the next point, started at that count): --resume continues
+    # each checkpoint at its count
     (out / "sweep_rows" / "sine_8Hz.json").unlink()
+    (out / "sweep_rows" / "sine_9Hz.json").unlink()
     runs.clear()
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
-    assert runs == [(8.0, explicit, 6, True)]
-    assert json.loads(capsys.readouterr().out)["rows"][1]["status"] == "ok (6 windows per period)"
+    assert runs == [(8.0, explicit, 6, True), (9.0, explicit, 6, True)]
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["status"] for r in rows[1:]] == ["ok (6 windows per period)"] * 2
     # every count diverges: iterated at the point's own count
     stable_below["8"] = 4
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--overwrite"]) == 0
@@ -302,6 +306,17 @@ def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():
         ["coupling.partitioned=true", "coupling.scheme=explicit-am", "time.steps_per_period=24"],
     )
     assert [c.time.steps_per_period for c in sweep_cli.with_fewer_windows(short)] == [20]
+    # longest windows first, each once; sines only (measured with sines)
+    mixed = load_case(
+        CASE,
+        ["coupling.partitioned=true", "coupling.scheme=explicit-am", "time.steps_per_period=40"]
+        + ["coupling.explicit_fallback_windows=[20, 30, 20, 25]"],
+    )
+    assert [c.time.steps_per_period for c in sweep_cli.with_fewer_windows(mixed)] == [30, 25, 20]
+    square = dataclasses.replace(
+        mixed, actuation=dataclasses.replace(mixed.actuation, waveform=Waveform.SQUARE)
+    )
+    assert sweep_cli.with_fewer_windows(square) == []
 
 
 @pytest.mark.parametrize("text, expected", [("1:5:2", [1.0, 3.0, 5.0]), ("3,10", [3.0, 10.0])])

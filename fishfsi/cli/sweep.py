@@ -223,9 +223,14 @@ def transient_sweep(
         redone = False
         if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
             attempts, iterated, redone = [iterated], None, True  # its run was already redone
-        elif resume and (folder / WINDOWS_MARK).is_file():  # it was rerun with fewer windows
-            marked = int((folder / WINDOWS_MARK).read_text().split()[0])
+        elif resume and (marked := marked_windows(folder)) is not None:  # fewer windows
             attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
+        if not redone and attempts[0] is not point:  # a --resume must start at this count
+            first = attempts[0].time.steps_per_period
+            mark = folder / WINDOWS_MARK
+            if marked_windows(folder) != first:
+                folder.mkdir(parents=True, exist_ok=True)
+                atomic_write(mark, f"{first}\nstarted with the windows a lower frequency needed\n")
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
             continued = resume and (folder / CHECKPOINT_FILE).is_file()
             notes = []
@@ -324,18 +329,30 @@ ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redon
 WINDOWS_MARK = "fewer_windows.txt"  # in a point's folder: rerun with these windows per period
 
 
+def marked_windows(folder: Path) -> int | None:
+    """The windows per period a point's rerun was started with (WINDOWS_MARK), None if none
+    (or an unreadable mark: the point then tries its counts again)."""
+    try:
+        return int((folder / WINDOWS_MARK).read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def with_fewer_windows(case: Case) -> list[Case]:
     """The point's case with each of coupling.explicit_fallback_windows below its own
-    time.steps_per_period, in order: the reruns of a point whose windows of one fluid solve
-    diverge, before its windows are iterated. None for an iterating scheme (also one with
-    explicit start-up periods: its iterated figures would change with the time step), a
-    coupling without a partitioned fluid, or a time step given in seconds."""
+    time.steps_per_period, longest windows first: the reruns of a sine point whose windows of
+    one fluid solve diverge, before its windows are iterated. None ([]) for an iterating
+    scheme (also one with explicit start-up periods: its iterated figures would change with
+    the time step), a coupling without a partitioned fluid, a time step given in seconds, or
+    a square wave (measured with sines only)."""
     c, t = case.coupling, case.time
     if with_iterated_windows(case) is None or t.step_s is not None:
         return []
-    if c.scheme.iterates:  # an iterated run's figures would change with its time step
+    if c.scheme.iterates or case.actuation.waveform is not Waveform.SINE:
         return []
-    counts = [n for n in c.explicit_fallback_windows if n < t.steps_per_period]
+    counts = sorted({n for n in c.explicit_fallback_windows if n < t.steps_per_period})[::-1]
+    if t.periodic_feedback_mirror:  # its half period must be whole windows
+        counts = [n for n in counts if n % 2 == 0]
     return [
         dataclasses.replace(case, time=dataclasses.replace(t, steps_per_period=n)) for n in counts
     ]

@@ -768,18 +768,18 @@ class Coupling:
         "are iterated until the periods agree to the tolerance, so the figures a run ends "
         "with are iterated windows'. For drives where one solve per window stays off the "
         "iterated state or diverges: square waves (3 Hz coarse: +3 % in thrust), sines above "
-        "15 Hz; with a sine below that, explicit-am settles within 0.1-0.4 % of it "
+        "13-15 Hz; with a sine below that, explicit-am settles within 0.1-0.4 % of it "
         "(docs/coupling.md). A run that ends before it iterates (under 4 periods) says so.",
     )
     explicit_fallback_windows: tuple[int, ...] = param(
         (30, 20),
-        "fsi-sweep with a one-solve scheme (explicit-am): where a point's windows diverge, run "
-        "it again with each of these time.steps_per_period below its own, in turn, before "
-        "iterating its windows. Longer windows steady one solve per window: the default "
-        "level's 15 Hz sine runs at 30 within 0.6 % (tail) and 2.3 % (thrust) of iterated "
-        "windows at 40 in a seventh of their time; at 20 the coarse thrust is off by -5 to "
-        "+4 % at 17-25 Hz. The row's status names the count; [] iterates at once "
-        "(docs/validation.md).",
+        "fsi-sweep with a one-solve scheme (explicit-am) and a sine: where a point's windows "
+        "diverge, run it again with each of these time.steps_per_period below its own, "
+        "longest windows first, before iterating its windows. Longer windows steady one "
+        "solve per window: the default level's 15 Hz sine runs at 30 within 0.6 % (tail) "
+        "and 2.3 % (thrust) of iterated windows at 40 in a seventh of their time; at 20 the "
+        "coarse thrust is off by -5 to +4 % at 17-25 Hz. The row's status names the count; "
+        "[] iterates at once (docs/validation.md).",
         ge=4,
         le=100_000,
     )
