@@ -239,34 +239,23 @@ def transient_sweep(
                     summary = run_or_afresh(attempt, folder, continued and k == 0)
                     break
                 except (CouplingDivergenceError, MeshFoldedError) as err:
+                    why = f"{waveform.value} {f:g} Hz: {str(err).splitlines()[0]}"
                     if k + 1 < len(attempts):
                         n = attempts[k + 1].time.steps_per_period
-                        print(
-                            f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; "
-                            f"running the point again with {n} windows per period "
-                            "(time.steps_per_period; coupling.explicit_fallback_windows)",
-                            file=sys.stderr,
-                        )
-                        folder.mkdir(parents=True, exist_ok=True)
-                        (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
-                        atomic_write(folder / WINDOWS_MARK, f"{n}\n{err}\n")
+                        how = f"{n} windows per period (time.steps_per_period; "
+                        how += "coupling.explicit_fallback_windows)"
+                        start_rerun(folder, why, how, WINDOWS_MARK, f"{n}\n{err}\n")
                         continue
                     if iterated is None:
                         raise
                     # one solve per window is unstable at this point (explicit added-mass
                     # instability, or a solver failing on its growing force): iterate its
                     # windows
-                    print(
-                        f"note: {waveform.value} {f:g} Hz: {str(err).splitlines()[0]}; running "
-                        "the point again with iterated windows (coupling.scheme = "
-                        f'"{iterated.coupling.scheme}", coupling.explicit_periods = 0, '
-                        "coupling.explicit_until_periodic = false)",
-                        file=sys.stderr,
+                    how = (
+                        f'iterated windows (coupling.scheme = "{iterated.coupling.scheme}", '
+                        "coupling.explicit_periods = 0, coupling.explicit_until_periodic = false)"
                     )
-                    folder.mkdir(parents=True, exist_ok=True)
-                    # the explicit run's checkpoint must not be continued as the rerun's
-                    (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
-                    atomic_write(folder / ITERATED_MARK, f"{err}\n")
+                    start_rerun(folder, why, how, ITERATED_MARK, f"{err}\n")
                     summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
                     redone = True
             if redone:
@@ -327,6 +316,17 @@ def transient_sweep(
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
 WINDOWS_MARK = "fewer_windows.txt"  # in a point's folder: rerun with these windows per period
+
+
+def start_rerun(folder: Path, why: str, how: str, mark: str, text: str) -> None:
+    """Say why a point runs again and how; drop the failed run's checkpoint (the rerun must
+    not continue it) and mark the folder, so --resume continues the rerun."""
+    from fsi_orchestrator.results import CHECKPOINT_FILE
+
+    print(f"note: {why}; running the point again with {how}", file=sys.stderr)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / CHECKPOINT_FILE).unlink(missing_ok=True)
+    atomic_write(folder / mark, text)
 
 
 def marked_windows(folder: Path) -> int | None:
