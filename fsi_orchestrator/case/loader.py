@@ -315,7 +315,7 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
         elif tuple(case.actuation.left_volts) != tuple(case.actuation.right_volts):
             why = (
                 "actuation.left_volts and right_volts differ, so the motion half a period later is "
-                "not the mirror image (a turning drive): set it to false"
+                "not the mirror image (a turning drive, a one-sided actuator): set it to false"
             )
         if why:
             raise CaseError(f"time.periodic_feedback_mirror: {why}")
