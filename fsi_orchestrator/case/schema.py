@@ -778,7 +778,7 @@ class Coupling:
         "longest windows first, before iterating its windows. Longer windows steady one "
         "solve per window: the default level's 15 Hz sine runs at 30 within 0.6 % (tail) "
         "and 2.3 % (thrust) of iterated windows at 40 in a seventh of their time; at 20 the "
-        "coarse thrust is off by -5 to +4 % at 17-25 Hz. The row's status names the count; "
+        "coarse thrust is off by -6 to +4 % at 17-25 Hz. The row's status names the count; "
         "[] iterates at once (docs/validation.md).",
         ge=4,
         le=100_000,
