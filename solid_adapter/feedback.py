@@ -89,16 +89,17 @@ class PeriodicFeedback:
         self.references = self._references_for(step + 1)
 
     def _references_for(self, step: int) -> list[NDArray]:
-        """The recorded references for the state at the start of ``step``, none from a ramp."""
-        out = []
-        delays = [self.steps_per_period]
+        """The recorded references for the state at the start of ``step``, none from a ramp:
+        v one period back and, with ``mirror``, S v half a period back."""
+        terms: list[tuple[int, NDArray | None]] = [(self.steps_per_period, None)]
         if self.mirror is not None:
-            delays.append(self.steps_per_period // 2)
-        for delay in delays:
+            terms.append((self.steps_per_period // 2, self.mirror))
+        out = []
+        for delay, sign in terms:
             back = step - delay
             v = None if 0 <= back < self.first_step else self._history.get(back)
             if v is not None:
-                out.append(v if delay == self.steps_per_period else self.mirror * v)
+                out.append(v if sign is None else sign * v)
         return out
 
     def history(self) -> tuple[NDArray, NDArray]:

@@ -227,10 +227,10 @@ def transient_sweep(
             attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
         if not redone and attempts[0] is not point:  # a --resume must start at this count
             first = attempts[0].time.steps_per_period
-            mark = folder / WINDOWS_MARK
             if marked_windows(folder) != first:
                 folder.mkdir(parents=True, exist_ok=True)
-                atomic_write(mark, f"{first}\nstarted with the windows a lower frequency needed\n")
+                text = f"{first}\nstarted with the windows a lower frequency needed\n"
+                atomic_write(folder / WINDOWS_MARK, text)
         try:  # one failed frequency (a CFD crash near resonance) must not lose the others
             continued = resume and (folder / CHECKPOINT_FILE).is_file()
             notes = []
