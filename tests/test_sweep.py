@@ -6,6 +6,7 @@ import csv
 import dataclasses
 import json
 import re
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -263,6 +264,14 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     assert runs == [(8.0, explicit, 6, True), (9.0, explicit, 6, True)]
     rows = json.loads(capsys.readouterr().out)["rows"]
     assert [r["status"] for r in rows[1:]] == ["ok (6 windows per period)"] * 2
+    # a new launch (another rank, a resumed sweep) learns the count from the finished rows:
+    # 9 Hz, lost with its folder, starts where 8 Hz's row says that point ran
+    (out / "sweep_rows" / "sine_9Hz.json").unlink()
+    shutil.rmtree(out / "sine_9Hz")
+    runs.clear()
+    assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
+    assert runs == [(9.0, explicit, 6, False)]
+    capsys.readouterr()
     # every count diverges: iterated at the point's own count
     stable_below["8"] = 4
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--overwrite"]) == 0

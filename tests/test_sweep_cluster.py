@@ -332,6 +332,65 @@ def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None 
     monkeypatch.setattr(run_cli, "run_dynamic", stub)
 
 
+def test_mpi_ranks_take_the_next_free_point_not_every_other_one(tmp_path, monkeypatch):
+    """Two ranks (threads sharing a fake MPI world): a rank held by a long point leaves the
+    short ones to the other, where round-robin would give it every other point; every point
+    runs once, rank 0 gathers the rows in order, and the claims are cleared after."""
+    import threading
+
+    from fsi_orchestrator.case import load_case
+    from fsi_orchestrator.case.schema import Waveform
+
+    sync = threading.Barrier(2)
+    parts: dict[int, list] = {}
+
+    class World:
+        def __init__(self, rank: int) -> None:
+            self.rank = rank
+
+        def Get_rank(self) -> int:
+            return self.rank
+
+        def Get_size(self) -> int:
+            return 2
+
+        def barrier(self) -> None:
+            sync.wait(timeout=60)
+
+        def gather(self, value, root):
+            parts[self.rank] = value
+            sync.wait(timeout=60)
+            return [parts[0], parts[1]] if self.rank == root else None
+
+    ran: dict[float, str] = {}
+
+    def stub(case, output, resume, show_progress):
+        f = case.actuation.frequency_hz
+        ran[f] = threading.current_thread().name
+        time.sleep(1.5 if f == 1.0 else 0.05)
+        return {"tip_amplitude_m": 1e-3 * f, "mean_thrust_n": 1e-4 * f}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    case = load_case(BEAM, ["actuation.mean_strain_transfer=0"])
+    out = tmp_path / "sweep"
+    rows: dict[int, list] = {}
+
+    def rank(r: int) -> None:
+        rows[r] = sweep_cli.transient_sweep(
+            case, [1.0, 2.0, 3.0, 4.0, 5.0], [Waveform.SINE], out, comm=World(r)
+        )
+
+    threads = [threading.Thread(target=rank, args=(r,), name=f"rank{r}") for r in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=60)
+    assert sorted(ran) == [1.0, 2.0, 3.0, 4.0, 5.0]
+    assert [f for f, name in ran.items() if name == ran[1.0]] == [1.0]
+    assert [r["frequency_hz"] for r in rows[0]] == [1.0, 2.0, 3.0, 4.0, 5.0] and rows[1] == []
+    assert not (out / sweep_cli.PointClaims.FOLDER).exists()
+
+
 def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
     tmp_path, monkeypatch, capsys
 ):

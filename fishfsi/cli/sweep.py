@@ -35,9 +35,10 @@ import hashlib
 import io
 import json
 import os
+import shutil
 import sys
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -162,14 +163,16 @@ def transient_sweep(
     resume: bool = False,
     on_row: OnRow | None = None,
     start_from: Path | None = None,
+    finished: Callable[[], dict[str, dict]] | None = None,
 ) -> list[dict]:
     """One nonlinear run per (waveform, frequency) not ``done`` (point_name), in the stable
     folder ``output/<point name>``; each row is handed to ``on_row`` as it is finished. With
-    ``comm`` (mpi_world(); the same ``done`` on every rank) the runs are dealt round-robin to
-    the ranks and gathered on rank 0; other ranks return []. ``resume``: a point whose folder
-    holds a checkpoint continues from it (fsi-run --resume). ``start_from``: an earlier sweep's
-    folder, whose point of the same name (a finished run) each point starts on
-    (started_from)."""
+    ``comm`` (mpi_world(); the same ``done`` on every rank) each rank takes the next point no
+    rank has taken (PointClaims), and the rows are gathered on rank 0; other ranks return [].
+    ``resume``: a point whose folder holds a checkpoint continues from it (fsi-run --resume).
+    ``start_from``: an earlier sweep's folder, whose point of the same name (a finished run)
+    each point starts on (started_from). ``finished``: the sweep's finished rows by point name
+    (SweepTable.rows), whose windows per period a higher frequency starts at."""
     from fluid_adapter.openfoam.errors import MeshFoldedError
     from fsi_orchestrator.convergence import CouplingDivergenceError
     from fsi_orchestrator.loop import AFRESH, ResumeError
@@ -194,13 +197,14 @@ def transient_sweep(
         from solid_adapter.build import build_shell_model
 
         ndof = build_shell_model(case).ndof
-    rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
+    claims = PointClaims(output, comm) if comm is not None else None
     mine = []
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
     learned_iterated = None  # the same, of the last point rerun with iterated windows
     steady: dict[Waveform, tuple[float, int]] = {}  # (f, windows per period) it ran with
-    for index in range(rank, len(jobs), size):
-        waveform, f = jobs[index]
+    for index, (waveform, f) in enumerate(jobs):
+        if claims is not None and not claims.take(point_name(waveform, f)):
+            continue  # another rank runs it
         folder = output / point_name(waveform, f)
         point = with_drive(case, f, waveform)
         if start_from is not None:
@@ -214,7 +218,7 @@ def transient_sweep(
         # one solve per window steadies with longer windows: those tried before iterating;
         # a higher frequency of the same waveform starts at the count a lower one needed
         attempts = [point, *with_fewer_windows(point)]
-        needed = steady.get(waveform)
+        needed = fewest_needed(steady.get(waveform), finished, waveform, f)
         if needed is not None and f > needed[0]:
             attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
         if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
@@ -308,10 +312,57 @@ def transient_sweep(
         if on_row is not None:
             on_row(point_name(waveform, f), row, time.perf_counter() - start)
         mine.append((index, row))
-    gathered = comm.gather(mine, root=0) if comm is not None else [mine]
-    if rank != 0:
+    if comm is None:
+        return [row for _, row in mine]
+    gathered = comm.gather(mine, root=0)
+    if comm.Get_rank() != 0:
         return []
+    assert claims is not None
+    claims.clear()  # every rank is past its last claim
     return [row for _, row in sorted(item for part in gathered for item in part)]
+
+
+class PointClaims:
+    """MPI ranks take a sweep's points as they free up: each rank runs the next point that no
+    rank has taken, claimed by creating its file in ``OUTPUT/.claims`` (exclusive create, also
+    on a shared file system), so a rank that drew short points runs more of them. Rank 0
+    clears the folder before any rank claims and after the last."""
+
+    FOLDER = ".claims"
+
+    def __init__(self, output: Path, comm) -> None:
+        self.folder = output / self.FOLDER
+        if comm.Get_rank() == 0:
+            self.clear()  # a killed launch's claims
+            self.folder.mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+
+    def take(self, name: str) -> bool:
+        try:
+            os.close(os.open(self.folder / name, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        except FileExistsError:
+            return False
+        return True
+
+    def clear(self) -> None:
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def fewest_needed(
+    own: tuple[float, int] | None,
+    finished: Callable[[], dict[str, dict]] | None,
+    waveform: Waveform,
+    f: float,
+) -> tuple[float, int] | None:
+    """The windows per period that the highest lower frequency of this waveform needed: as
+    this rank ran it (``own``: frequency, windows) or as any rank's finished row says (a row
+    rerun with fewer windows); None where none needed fewer."""
+    found = [own] if own is not None else []
+    for row in (finished() if finished is not None else {}).values():
+        lower = row.get("waveform") == waveform.value and row.get("frequency_hz", f) < f
+        if lower and "windows per period" in row.get("status", ""):
+            found.append((row["frequency_hz"], int(row["windows_per_period"])))
+    return max(found, default=None)
 
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
@@ -897,6 +948,7 @@ def _sweep(args: argparse.Namespace) -> int:
             resume=args.resume,
             on_row=on_row,
             start_from=start_from,
+            finished=table.rows,
         )
         if rank != 0:  # rank 0 merges and prints, after the gather
             return EXIT_OK
