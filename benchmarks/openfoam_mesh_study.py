@@ -13,7 +13,8 @@ elongated-body estimate of the same motion (fluid_adapter.slender_body).
 ``--frequency 18 --amplitude-mm 9`` repeats the study at the seed's peak-thrust frequency with
 the coupled runs' tail amplitude there (the same shape: a proxy for the coupled motion).
 ``--periods 8`` shows how fast the flow alone becomes periodic (mean thrust and lateral force
-amplitude per period, ``per_period``).
+amplitude per period, ``per_period``). ``--fluid outer_correctors=4 --fluid max_courant=10``
+sets [fluid] keys of the runs (docs/openfoam.md, Pressure-velocity correctors).
 """
 
 from __future__ import annotations
@@ -43,10 +44,11 @@ def run_level(
     frequency_hz: float = 3.0,
     amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
     periods: int = PERIODS,
+    fluid: dict | None = None,
 ) -> dict:
     case = case_from_dict(
         {
-            "fluid": {"model": "openfoam", "mesh_level": level},
+            "fluid": {"model": "openfoam", "mesh_level": level, **(fluid or {})},
             "actuation": {"frequency_hz": frequency_hz},
         },
         root,
@@ -89,15 +91,26 @@ def main() -> None:
         default=PERIODS,
         help="periods to run; the mean thrust is the last one's",
     )
+    parser.add_argument(
+        "--fluid",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a [fluid] key of the runs' case, e.g. outer_correctors=4 or max_courant=10",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
+    fluid = {}
+    for item in args.fluid:
+        key, _, value = item.partition("=")
+        fluid[key.strip()] = json.loads(value) if value.strip()[:1].isdigit() else value.strip()
     root = Path(tempfile.mkdtemp(prefix="fishfsi-mesh-study-"))
     rows = []
     try:
         for level in args.levels:
             amplitude = 1e-3 * args.amplitude_mm
             rows.append(
-                run_level(level, root, args.windows, args.frequency, amplitude, args.periods)
+                run_level(level, root, args.windows, args.frequency, amplitude, args.periods, fluid)
             )
             print(json.dumps(rows[-1]), flush=True)
     finally:

@@ -259,3 +259,20 @@ def test_persistent_driver_takes_an_implicit_scheme(tmp_path):
         '[fluid]\nmodel = "openfoam"\ndriver = "persistent"\n[coupling]\nscheme = "iqn-ils"\n'
     )
     assert load_case(tmp_path).fluid.driver.value == "persistent"
+
+
+def test_the_pimple_correctors_come_from_the_case(tmp_path):
+    """fluid.outer_correctors and fluid.non_orthogonal_correctors reach fvSolution's PIMPLE
+    dictionary; the fish's tank solves pFinal to 1e-5 (every outer iteration ends on it)."""
+    from fluid_adapter.openfoam.casefiles import fv_solution
+    from fluid_adapter.openfoam.tankcase import flow_settings
+    from fsi_orchestrator.case.loader import case_from_dict
+
+    default = fv_solution(flow_settings(case_from_dict({"fluid": {"model": "openfoam"}}, tmp_path)))
+    pimple = default["PIMPLE"]
+    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (2, 0)
+    assert default["solvers"]["pFinal"]["tolerance"] == 1e-5
+    assert default["solvers"]["pFinal"]["relTol"] == 0
+    fluid = {"model": "openfoam", "outer_correctors": 3, "non_orthogonal_correctors": 1}
+    pimple = fv_solution(flow_settings(case_from_dict({"fluid": fluid}, tmp_path)))["PIMPLE"]
+    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (3, 1)

@@ -39,6 +39,9 @@ class FlowSettings:
     outlet_patches: tuple[str, ...] = ()
     moving: bool = True
     n_outer: int = 2
+    n_non_orthogonal: int = 1
+    # transient p (and pFinal) tolerance, normalized residual; pcorr's is 1e-3 (fv_solution)
+    p_tolerance: float = 1e-6
     max_courant: float = 2.0
     # velocityLaplacian diffusivity tokens: the plate-distance file (motion.py) by default;
     # e.g. ("quadratic", "inverseDistance", ["flag"]) for a small-motion 2D case
@@ -190,7 +193,11 @@ def fv_solution(s: FlowSettings, steady: bool = False) -> dict:
     # costs 22 % less (1.51 -> 1.17 s; pcorr took 100 GAMG iterations, 1 s of a relaunch).
     # correctPhi itself stays: without it the forces were 6 % lower (docs/openfoam.md).
     smooth = {"solver": "smoothSolver", "smoother": "symGaussSeidel", "tolerance": 1e-9}
-    p = {"solver": "GAMG", "smoother": "GaussSeidel", "tolerance": 1e-7 if steady else 1e-6}
+    p = {
+        "solver": "GAMG",
+        "smoother": "GaussSeidel",
+        "tolerance": 1e-7 if steady else s.p_tolerance,
+    }
     p["relTol"] = 0.01
     solvers = {
         "p": p,
@@ -216,7 +223,7 @@ def fv_solution(s: FlowSettings, steady: bool = False) -> dict:
             "momentumPredictor": True,
             "nOuterCorrectors": s.n_outer,
             "nCorrectors": 2,
-            "nNonOrthogonalCorrectors": 1,
+            "nNonOrthogonalCorrectors": s.n_non_orthogonal,
             "correctPhi": s.moving,
             "moveMeshOuterCorrectors": False,
         },
