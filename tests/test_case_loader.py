@@ -276,3 +276,28 @@ def test_the_pimple_correctors_come_from_the_case(tmp_path):
     fluid = {"model": "openfoam", "outer_correctors": 3, "non_orthogonal_correctors": 1}
     pimple = fv_solution(flow_settings(case_from_dict({"fluid": fluid}, tmp_path)))["PIMPLE"]
     assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (3, 1)
+
+
+def test_pimple_settings_do_not_regenerate_the_fluid_folder(tmp_path):
+    """The PIMPLE keys are left out of the generated folder's fingerprint (a reused folder gets
+    its fvSolution rewritten instead of a new mesh), so a folder stamped before the keys
+    existed (a run resumed across versions) keeps its key; a physical key still changes it."""
+    import dataclasses
+    import hashlib
+    import json
+
+    from fluid_adapter.openfoam.build import SOLUTION_KEYS, fingerprint
+    from fsi_orchestrator.case.loader import case_from_dict
+
+    case = case_from_dict({"fluid": {"model": "openfoam"}}, tmp_path)
+    fluid = {"model": "openfoam", "outer_correctors": 4, "non_orthogonal_correctors": 2}
+    assert fingerprint(case_from_dict({"fluid": fluid}, tmp_path), 1.0, 1) == fingerprint(
+        case, 1.0, 1
+    )
+    old_fluid = {k: v for k, v in dataclasses.asdict(case.fluid).items() if k not in SOLUTION_KEYS}
+    old = {"geometry": dataclasses.asdict(case.geometry), "fluid": old_fluid}
+    old |= {"mesh_scale": 1.0, "processes": 1}
+    stamped = hashlib.sha256(json.dumps(old, sort_keys=True, default=str).encode()).hexdigest()
+    assert fingerprint(case, 1.0, 1) == stamped
+    denser = case_from_dict({"fluid": {"model": "openfoam", "density_kg_m3": 1000.0}}, tmp_path)
+    assert fingerprint(denser, 1.0, 1) != stamped

@@ -335,7 +335,8 @@ def stub_runs(monkeypatch, calls: list, fail: dict[float, BaseException] | None 
 def test_mpi_ranks_take_the_next_free_point_not_every_other_one(tmp_path, monkeypatch):
     """Two ranks (threads sharing a fake MPI world): a rank held by a long point leaves the
     short ones to the other, where round-robin would give it every other point; every point
-    runs once, rank 0 gathers the rows in order, and the claims are cleared after."""
+    runs once, rank 0 gathers the rows in order, and the launch's claims are cleared after
+    (a killed launch's stay, and do not hold this one's points)."""
     import threading
 
     from fsi_orchestrator.case import load_case
@@ -354,8 +355,11 @@ def test_mpi_ranks_take_the_next_free_point_not_every_other_one(tmp_path, monkey
         def Get_size(self) -> int:
             return 2
 
-        def barrier(self) -> None:
+        def bcast(self, value, root):
+            if self.rank == root:
+                parts[-1] = value
             sync.wait(timeout=60)
+            return parts[-1]
 
         def gather(self, value, root):
             parts[self.rank] = value
@@ -373,6 +377,9 @@ def test_mpi_ranks_take_the_next_free_point_not_every_other_one(tmp_path, monkey
     monkeypatch.setattr(run_cli, "run_dynamic", stub)
     case = load_case(BEAM, ["actuation.mean_strain_transfer=0"])
     out = tmp_path / "sweep"
+    killed = out / sweep_cli.PointClaims.FOLDER / "killed"
+    killed.mkdir(parents=True)
+    (killed / "sine_3Hz").touch()
     rows: dict[int, list] = {}
 
     def rank(r: int) -> None:
@@ -388,7 +395,7 @@ def test_mpi_ranks_take_the_next_free_point_not_every_other_one(tmp_path, monkey
     assert sorted(ran) == [1.0, 2.0, 3.0, 4.0, 5.0]
     assert [f for f, name in ran.items() if name == ran[1.0]] == [1.0]
     assert [r["frequency_hz"] for r in rows[0]] == [1.0, 2.0, 3.0, 4.0, 5.0] and rows[1] == []
-    assert not (out / sweep_cli.PointClaims.FOLDER).exists()
+    assert [p.name for p in (out / sweep_cli.PointClaims.FOLDER).iterdir()] == ["killed"]
 
 
 def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(

@@ -38,6 +38,7 @@ import os
 import shutil
 import sys
 import time
+import uuid
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -219,6 +220,8 @@ def transient_sweep(
         # a higher frequency of the same waveform starts at the count a lower one needed
         attempts = [point, *with_fewer_windows(point)]
         needed = fewest_needed(steady.get(waveform), finished, waveform, f)
+        if resume and (folder / CHECKPOINT_FILE).is_file():
+            needed = None  # it continues at the count its checkpoint was written with
         if needed is not None and f > needed[0]:
             attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
         if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
@@ -324,28 +327,31 @@ def transient_sweep(
 
 class PointClaims:
     """MPI ranks take a sweep's points as they free up: each rank runs the next point that no
-    rank has taken, claimed by creating its file in ``OUTPUT/.claims`` (exclusive create, also
-    on a shared file system), so a rank that drew short points runs more of them. Rank 0
-    clears the folder before any rank claims and after the last."""
+    rank has taken, claimed by creating its file in this launch's ``OUTPUT/.claims/<id>``
+    (exclusive create, also on a shared file system), so a rank that drew short points runs
+    more of them. Rank 0 removes the launch's folder after the last claim."""
 
     FOLDER = ".claims"
 
     def __init__(self, output: Path, comm) -> None:
-        self.folder = output / self.FOLDER
-        if comm.Get_rank() == 0:
-            self.clear()  # a killed launch's claims
-            self.folder.mkdir(parents=True, exist_ok=True)
-        comm.barrier()
+        launch = comm.bcast(uuid.uuid4().hex if comm.Get_rank() == 0 else None, root=0)
+        self.folder = output / self.FOLDER / launch
 
     def take(self, name: str) -> bool:
-        try:
-            os.close(os.open(self.folder / name, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
-        except FileExistsError:
-            return False
-        return True
+        for _ in range(2):  # the folder is made by whichever rank claims first
+            try:
+                os.close(os.open(self.folder / name, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+                return True
+            except FileExistsError:
+                return False
+            except FileNotFoundError:
+                self.folder.mkdir(parents=True, exist_ok=True)
+        raise OSError(f"{self.folder}: cannot claim {name}")
 
     def clear(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
+        with contextlib.suppress(OSError):  # other launches' claims (killed ones) stay
+            self.folder.parent.rmdir()
 
 
 def fewest_needed(
@@ -357,10 +363,11 @@ def fewest_needed(
     """The windows per period that the highest lower frequency of this waveform needed: as
     this rank ran it (``own``: frequency, windows) or as any rank's finished row says (a row
     rerun with fewer windows); None where none needed fewer."""
-    found = [own] if own is not None else []
+    found = [own] if own is not None and own[0] < f else []
     for row in (finished() if finished is not None else {}).values():
         lower = row.get("waveform") == waveform.value and row.get("frequency_hz", f) < f
-        if lower and "windows per period" in row.get("status", ""):
+        status = row.get("status", "")
+        if lower and status.startswith("ok") and "windows per period" in status:
             found.append((row["frequency_hz"], int(row["windows_per_period"])))
     return max(found, default=None)
 
@@ -979,7 +986,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         default="linear",
         help="linear: modal superposition about the mean-voltage equilibrium, no CFD (an "
         "OpenFOAM case uses the potential model in its tank; seconds); transient: a run per "
-        "frequency with the case's own fluid (MPI: one frequency per rank); default: linear",
+        "frequency with the case's own fluid (MPI: each rank takes the next free frequency); "
+        "default: linear",
     )
     parser.add_argument("--output", help="output folder (default: CASE/output/sweep)")
     parser.add_argument(

@@ -15,6 +15,7 @@ from fsi_orchestrator.case.schema import FluidDriver
 from fsi_orchestrator.case.timing import case_schedule
 
 from . import runner
+from .casefiles import fv_solution
 from .checkmesh import MeshQuality, parse
 from .drivers import PersistentDriver, RelaunchDriver
 from .fishmesh import FISH_PATCHES, TankGeometry, tank_geometry
@@ -28,13 +29,17 @@ from .slices import Surface, fish_surfaces
 from .tankcase import flow_settings, generate_tank_case
 
 FINGERPRINT = "fishfsi-case.json"
+# [fluid] keys that only set the PIMPLE loop: a reused folder gets its fvSolution rewritten,
+# and a folder generated before they existed (a run resumed across versions) stays reusable
+SOLUTION_KEYS = ("outer_correctors", "non_orthogonal_correctors")
 
 
 def fingerprint(case: Case, mesh_scale: float, processes: int) -> str:
     """What the generated folder depends on (geometry and fluid sections, mesh scale)."""
+    fluid = {k: v for k, v in asdict(case.fluid).items() if k not in SOLUTION_KEYS}
     data = {
         "geometry": asdict(case.geometry),
-        "fluid": asdict(case.fluid),
+        "fluid": fluid,
         "mesh_scale": mesh_scale,
         "processes": processes,
     }
@@ -65,6 +70,7 @@ def prepare_case(
     stamp = workdir / FINGERPRINT
     key = fingerprint(case, mesh_scale, processes)
     if reuse and stamp.is_file() and json.loads(stamp.read_text()).get("key") == key:
+        write_dict(workdir / "system" / "fvSolution", fv_solution(flow_settings(case)))
         return False, parse((workdir / "log.checkMesh").read_text())
     generated = generate_tank_case(case, workdir, dt=dt, mesh_scale=mesh_scale)
     if processes > 1:

@@ -187,8 +187,9 @@ def fv_schemes(s: FlowSettings, steady: bool = False) -> dict:
 def fv_solution(s: FlowSettings, steady: bool = False) -> dict:
     # Tolerances: p in m2/s2 (kinematic, |p| ~ 0.1-1 here), mesh velocity in m/s (|v| < 1);
     # 1e-8 m/s of mesh velocity moves a point 1e-10 m per step.
-    # Transient p to 1e-6 and pcorr (correctPhi's flux projection after the mesh moved, from
-    # zero every step) to 1e-3 instead of 1e-7 / 1e-5: the fish's forces on a prescribed
+    # Transient p to 1e-6 (the fish's tank: 1e-5, tankcase.flow_settings) and pcorr
+    # (correctPhi's flux projection after the mesh moved, from zero every step) to 1e-3
+    # instead of 1e-7 / 1e-5: the fish's forces on a prescribed
     # motion change by 3e-6 of their largest value (default level; thrust 2e-6) while a step
     # costs 22 % less (1.51 -> 1.17 s; pcorr took 100 GAMG iterations, 1 s of a relaunch).
     # correctPhi itself stays: without it the forces were 6 % lower (docs/openfoam.md).

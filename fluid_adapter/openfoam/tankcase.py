@@ -64,9 +64,9 @@ def flow_settings(case: Case) -> FlowSettings:
         max_courant=fl.max_courant,
         n_outer=fl.outer_correctors,
         n_non_orthogonal=fl.non_orthogonal_correctors,
-        # pFinal to 1e-5, not 1e-6: every PIMPLE outer iteration ends on pFinal in v1912, and
-        # the fish's forces moved by under 1e-5 of their value (3 and 18 Hz, default level)
-        # while a step cost 10 % less (docs/openfoam.md, Pressure solver settings)
+        # p and pFinal to 1e-5, not 1e-6: every PIMPLE outer iteration ends on pFinal in
+        # v1912; at 3 Hz (default level) the thrust and lateral force kept 6 digits
+        # (docs/openfoam.md, Pressure-velocity correctors)
         p_tolerance=1e-5,
     )
 
