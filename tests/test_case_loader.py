@@ -270,12 +270,12 @@ def test_the_pimple_correctors_come_from_the_case(tmp_path):
 
     default = fv_solution(flow_settings(case_from_dict({"fluid": {"model": "openfoam"}}, tmp_path)))
     pimple = default["PIMPLE"]
-    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (2, 0)
+    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (2, 1)
     assert default["solvers"]["pFinal"]["tolerance"] == 1e-5
     assert default["solvers"]["pFinal"]["relTol"] == 0
-    fluid = {"model": "openfoam", "outer_correctors": 3, "non_orthogonal_correctors": 1}
+    fluid = {"model": "openfoam", "outer_correctors": 3, "non_orthogonal_correctors": 0}
     pimple = fv_solution(flow_settings(case_from_dict({"fluid": fluid}, tmp_path)))["PIMPLE"]
-    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (3, 1)
+    assert (pimple["nOuterCorrectors"], pimple["nNonOrthogonalCorrectors"]) == (3, 0)
 
 
 def test_pimple_settings_do_not_regenerate_the_fluid_folder(tmp_path):

@@ -102,10 +102,10 @@ def _time(path):
 
 
 def test_two_outer_correctors_hold_the_thrust_of_converged_ones_and_piso_does_not(tmp_path):
-    """The PIMPLE defaults (2 outer correctors, no non-orthogonal corrector, pFinal to 1e-5)
-    against 4 outer correctors with a non-orthogonal corrector (the outer loop converged):
-    mean thrust of the second period within 1 % (measured 0.4 %, coarse; 0.3 % on the default
-    level, docs/openfoam.md), where PISO (1 outer corrector) is 5 % off."""
+    """The PIMPLE defaults (2 outer correctors, a non-orthogonal corrector, pFinal to 1e-5)
+    against 4 outer correctors (the outer loop converged): mean thrust of the second period
+    within 1 % (measured 0.45 %, coarse; 0.5 % on the default level, docs/openfoam.md), where
+    PISO (1 outer corrector) is 5.6 % off."""
 
     def thrust(outer: int, non_orthogonal: int) -> float:
         fluid = {"model": "openfoam", "mesh_level": "coarse", "max_courant": 10.0}
@@ -123,5 +123,5 @@ def test_two_outer_correctors_hold_the_thrust_of_converged_ones_and_piso_does_no
         return result.mean_thrust(40)
 
     converged = thrust(4, 1)
-    assert thrust(2, 0) == pytest.approx(converged, rel=0.01)
-    assert abs(thrust(1, 0) / converged - 1) > 0.03
+    assert thrust(2, 1) == pytest.approx(converged, rel=0.01)
+    assert abs(thrust(1, 1) / converged - 1) > 0.03
