@@ -13,8 +13,9 @@ elongated-body estimate of the same motion (fluid_adapter.slender_body).
 ``--frequency 18 --amplitude-mm 9`` repeats the study at the seed's peak-thrust frequency with
 the coupled runs' tail amplitude there (the same shape: a proxy for the coupled motion).
 ``--periods 8`` shows how fast the flow alone becomes periodic (mean thrust and lateral force
-amplitude per period, ``per_period``). ``--fluid outer_correctors=4 --fluid max_courant=10``
-sets [fluid] keys of the runs (docs/openfoam.md, Pressure-velocity correctors).
+amplitude per period, ``per_period``). ``--set fluid.outer_correctors=4 --set
+fluid.max_courant=10`` sets keys of the runs' case, as fsi-run's --set (docs/openfoam.md,
+Pressure-velocity correctors).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import argparse
 import json
 import shutil
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +34,7 @@ from fishfsi.cli.prescribed import (
     run_prescribed,
     slender_body_estimate,
 )
-from fsi_orchestrator.case.loader import case_from_dict
+from fsi_orchestrator.case.loader import case_from_dict, merge_overrides
 
 PERIODS = 2
 
@@ -44,15 +46,13 @@ def run_level(
     frequency_hz: float = 3.0,
     amplitude_m: float = ACOUSTIC_TAIL_AMPLITUDE_M,
     periods: int = PERIODS,
-    fluid: dict | None = None,
+    overrides: Sequence[str] = (),
 ) -> dict:
-    case = case_from_dict(
-        {
-            "fluid": {"model": "openfoam", "mesh_level": level, **(fluid or {})},
-            "actuation": {"frequency_hz": frequency_hz},
-        },
-        root,
-    )
+    raw = {
+        "fluid": {"model": "openfoam", "mesh_level": level},
+        "actuation": {"frequency_hz": frequency_hz},
+    }
+    case = case_from_dict(merge_overrides(raw, overrides), root)
     result = run_prescribed(
         case,
         root / level,
@@ -92,25 +92,23 @@ def main() -> None:
         help="periods to run; the mean thrust is the last one's",
     )
     parser.add_argument(
-        "--fluid",
+        "--set",
         action="append",
         default=[],
-        metavar="KEY=VALUE",
-        help="a [fluid] key of the runs' case, e.g. outer_correctors=4 or max_courant=10",
+        metavar="SECTION.KEY=VALUE",
+        help="a key of the runs' case, e.g. fluid.outer_correctors=4 (as fsi-run --set)",
     )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    fluid = {}
-    for item in args.fluid:
-        key, _, value = item.partition("=")
-        fluid[key.strip()] = json.loads(value) if value.strip()[:1].isdigit() else value.strip()
     root = Path(tempfile.mkdtemp(prefix="fishfsi-mesh-study-"))
     rows = []
     try:
         for level in args.levels:
             amplitude = 1e-3 * args.amplitude_mm
             rows.append(
-                run_level(level, root, args.windows, args.frequency, amplitude, args.periods, fluid)
+                run_level(
+                    level, root, args.windows, args.frequency, amplitude, args.periods, args.set
+                )
             )
             print(json.dumps(rows[-1]), flush=True)
     finally:
