@@ -285,6 +285,40 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     ]
 
 
+def test_a_mesh_folded_by_a_steady_swing_is_not_rerun(tmp_path, capsys, monkeypatch):
+    """A fold after whole periods of a swing that stopped growing is the motion's own (the
+    default level's 1 Hz point): fewer or iterated windows would move the plate the same way,
+    so the point fails at once with one line. A fold within the first period (a growing
+    explicit instability) is rerun as before."""
+    from fluid_adapter.openfoam.errors import MeshFoldedError
+
+    real = run_cli.run_dynamic
+    runs = []
+
+    def folding(case, output, **kwargs):
+        runs.append((case.coupling.scheme, case.time.steps_per_period))
+        real(case, output, **kwargs)
+        raise MeshFoldedError("t=0.3: 2 faces inside out at x = 163 mm")
+
+    monkeypatch.setattr(run_cli, "run_dynamic", folding)
+    args = [str(CASE), "--frequencies", "2", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.steps_per_period=10", "--set", "coupling.partitioned=true"]
+    args += ["--set", "coupling.scheme=explicit-am"]
+    args += ["--set", "coupling.explicit_fallback_windows=[8]"]
+    out = tmp_path / "steady"
+    assert sweep_cli.main([*args, "--set", "time.periods=2", "--json", "--output", str(out)]) == 1
+    row = json.loads(capsys.readouterr().out)["rows"][0]
+    assert len(runs) == 1
+    assert row["status"].startswith("failed: t=0.3: 2 faces inside out")
+    assert "after 2 whole periods of a steady" in row["status"]
+    assert "not rerun" in row["status"]
+    runs.clear()
+    out = tmp_path / "early"
+    assert sweep_cli.main([*args, "--set", "time.periods=0.5", "--json", "--output", str(out)]) == 1
+    capsys.readouterr()
+    assert [n for _, n in runs] == [10, 8, 10]  # fewer windows, then iterated
+
+
 def test_only_cases_with_single_solve_windows_have_an_iterated_rerun():
     from fsi_orchestrator.case.schema import CouplingScheme
 

@@ -42,6 +42,7 @@ import uuid
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
+import h5py
 import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
@@ -246,6 +247,11 @@ def transient_sweep(
                     summary = run_or_afresh(attempt, folder, continued and k == 0)
                     break
                 except (CouplingDivergenceError, MeshFoldedError) as err:
+                    if isinstance(err, MeshFoldedError) and (
+                        own_motion := folded_on_a_steady_swing(folder, attempt)
+                    ):
+                        first_line = str(err).splitlines()[0]
+                        raise MeshFoldedError(f"{first_line} ({own_motion})") from err
                     why = f"{waveform.value} {f:g} Hz: {str(err).splitlines()[0]}"
                     if k + 1 < len(attempts):
                         n = attempts[k + 1].time.steps_per_period
@@ -442,6 +448,33 @@ def started_from(case: Case, source: Path, ndof: int) -> Case:
             why = f"cannot start it ({str(err).removeprefix('time.start_from: ')})"
     print(f"note: {source} {why}; the point starts as usual", file=sys.stderr)
     return case
+
+
+# a swing that grew by less than this over its last whole period is the motion's own (a fold
+# then is not the coupling's instability, whose force grows by far more per period)
+STEADY_GROWTH = 1.25
+
+
+def folded_on_a_steady_swing(folder: Path, case: Case) -> str | None:
+    """Why a point whose mesh folded is not rerun (with fewer or iterated windows, which
+    move the plate the same way and fold it again), or None: its run recorded at least two
+    whole periods and its tail's swing had stopped growing."""
+    from fsi_orchestrator.results import RESULTS_FILE
+
+    from .run import period_amplitudes, windows_per_period
+
+    try:
+        with h5py.File(folder / RESULTS_FILE, "r") as h5:
+            tip = h5["shell/tip_displacement_m"][:, 2]
+    except (OSError, KeyError):
+        return None
+    amplitudes = period_amplitudes(tip, windows_per_period(case))
+    if len(amplitudes) < 2 or amplitudes[-1] > STEADY_GROWTH * amplitudes[-2]:
+        return None
+    return (
+        f"after {len(amplitudes)} whole periods of a steady {amplitudes[-1] * 1e3:.1f} mm tail "
+        "swing: the motion itself folds this mesh, so the point is not rerun"
+    )
 
 
 def with_iterated_windows(case: Case) -> Case | None:

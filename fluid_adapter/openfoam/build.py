@@ -130,6 +130,7 @@ def build_openfoam_participant(
         n_windows=n_windows,
         flow_surfaces=flow_surfaces(case, interface),
         flow_from=flow_from,
+        drift_reset_windows=max(1, round(1.0 / (case.actuation.frequency_hz * dt))),
     )
     participant.mesh_quality = quality
     return participant

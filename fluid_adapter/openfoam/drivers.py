@@ -213,9 +213,14 @@ class RelaunchDriver:
         self.run.remove_samples(self.dt, after=t)
         self.time, self.displacement = t, u.copy()
 
-    def close(self) -> None:
+    def release(self) -> None:
+        """End the process loaded ahead: the next solve launches from the time folders as
+        they are on disk (after the mesh's points were reset there)."""
         _end(self.ahead)
         self.ahead = None
+
+    def close(self) -> None:
+        self.release()
         _remove_fifos(self.run)
 
 
@@ -383,10 +388,15 @@ class PersistentDriver:
         self.run.remove_load_samples(set(), after=t + 1e-6 * self.dt)
         self.time, self.step, self.displacement = t, step, u.copy()
 
-    def close(self) -> None:
+    def release(self) -> None:
+        """End the loaded processes: the next window launches from the time folders as they
+        are on disk (after the mesh's points were reset there)."""
         _end(self.live)
         _end(self.spare)
         self.live = self.spare = None
+
+    def close(self) -> None:
+        self.release()
         _remove_fifos(self.run)
 
 
@@ -429,12 +439,14 @@ def run_mesh_motion(
     dt: float,
     n_steps: int,
     counts: tuple[int, int] = (0, 0),
+    write_every: int | None = None,
 ) -> list[MeshQuality]:
     """Move the mesh only (``moveDynamicMesh``, no flow) through a prescribed motion, with a
-    full mesh check after every step; returns the checks in time order."""
+    full mesh check after every step; returns the checks in time order. Time folders are
+    written every ``write_every`` steps (default: only the last)."""
     _write_batch_samples(run, displacement, dt, n_steps, 0.0)
     run.reset_body_bc("0")
-    run.set_window("0", n_steps * dt, dt, write_every=n_steps)
+    run.set_window("0", n_steps * dt, dt, write_every=write_every or n_steps)
     run.set_controls(adjustTimeStep=False)
     log = runner.run(
         runner.Command(

@@ -25,6 +25,7 @@ from .errors import DivergenceError, DriverError, MeshFoldedError
 from .flow_start import START_UP_WINDOWS, FlowSource, place
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
+from .rest_mesh import DriftSchedule, reset_points
 from .slices import Surface, sample_slices
 
 FACE_FORCE = "face_force"  # (m, 3) N
@@ -48,9 +49,13 @@ class OpenFoamParticipant:
         n_windows: int,
         flow_surfaces: tuple[Surface, ...] = (),
         flow_from: FlowSource | None = None,
+        drift_reset_windows: int = 0,
     ) -> None:
-        """``flow_from``: an earlier run's flow to start from (start_displaced)."""
+        """``flow_from``: an earlier run's flow to start from (start_displaced).
+        ``drift_reset_windows``: put the moved mesh back on its path from rest after this many
+        windows, and then as often as its drift needs (rest_mesh.py; 0: never)."""
         self.run, self.driver = run, driver
+        self.drift = DriftSchedule(first=drift_reset_windows, longest=max(n_windows, 1))
         self.flow_from = flow_from
         self.flow_surfaces = flow_surfaces
         self.dt, self.n_windows = dt, n_windows
@@ -96,6 +101,7 @@ class OpenFoamParticipant:
         self._displacement = u.copy()
 
     def solve(self, dt: float) -> None:
+        self._undo_drift(dt)
         self._check_moved_mesh(dt)
         try:
             self._loads = self.driver.advance(self._displacement, dt)
@@ -117,6 +123,19 @@ class OpenFoamParticipant:
         except FileNotFoundError:  # nothing written at the window start: nothing to check
             return None
         return folded_mesh(self.run.path, name)
+
+    def _undo_drift(self, dt: float) -> None:
+        """At a window start the schedule names (its first solve only): the window start's
+        points back on the path from rest; the loaded solvers hold the old ones, so they go."""
+        window = int(round(self.time / dt))
+        if not self.drift.due(window):
+            return
+        try:
+            name = self.run.time_folder(self.time, dt)
+        except FileNotFoundError:  # nothing written at the window start
+            return
+        self.driver.release()
+        self.drift.record(window, reset_points(self.run, name, self.driver.displacement, dt))
 
     def _check_moved_mesh(self, dt: float) -> None:
         """Every MESH_CHECK_WINDOWS windows: stop on a folded mesh rather than pass on the
