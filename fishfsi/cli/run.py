@@ -485,13 +485,13 @@ def coupling_summary(case: Case, results_path: Path, coupling) -> dict:
         start["resumed_from_scheme"] = coupling.resumed_from_scheme.value
     if coupling.start_fit is not None:
         start["start_correction"] = coupling.start_fit.summary(coupling.start_orbit.shape_z)
-    drift = getattr(coupling.fluid, "drift", None)  # OpenFOAM's mesh put back on its path
-    if drift is not None:
+    resets = getattr(coupling.fluid, "mesh_resets", None)  # OpenFOAM's mesh put back on its path
+    if resets is not None:
         # the fluid's clock runs through the lead-in, which ends at the run's t = 0
         lead_in = coupling.start_up.fluid_windows if coupling.settings.lead_in_windows else 0
         start["mesh_resets"] = [
             {"time_s": (window - lead_in) * schedule_of(case).dt, "drift_m": shift}
-            for window, shift in drift.resets
+            for window, shift in resets
         ]
     return {
         **start,

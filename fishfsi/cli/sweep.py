@@ -450,30 +450,37 @@ def started_from(case: Case, source: Path, ndof: int) -> Case:
     return case
 
 
-# a swing that grew by less than this over its last whole period is the motion's own (a fold
-# then is not the coupling's instability, whose force grows by far more per period)
+# a swing that grew by less than this from its second-to-last whole period to the rest of the
+# run is the motion's own (a fold then is not the coupling's instability, whose force and
+# mean position grow by far more per period)
 STEADY_GROWTH = 1.25
 
 
 def folded_on_a_steady_swing(folder: Path, case: Case) -> str | None:
     """Why a point whose mesh folded is not rerun (with fewer or iterated windows, which
     move the plate the same way and fold it again), or None: its run recorded at least two
-    whole periods and its tail's swing had stopped growing."""
+    whole periods, and the tail's reach over the last whole period and the windows after it
+    stayed within STEADY_GROWTH of its reach over the period before."""
     from fsi_orchestrator.results import RESULTS_FILE
 
-    from .run import period_amplitudes, windows_per_period
+    from .run import complete_periods, windows_per_period
 
     try:
-        with h5py.File(folder / RESULTS_FILE, "r") as h5:
+        with h5py.File(folder / RESULTS_FILE, "r", locking=False) as h5:
             tip = h5["shell/tip_displacement_m"][:, 2]
     except (OSError, KeyError):
         return None
-    amplitudes = period_amplitudes(tip, windows_per_period(case))
-    if len(amplitudes) < 2 or amplitudes[-1] > STEADY_GROWTH * amplitudes[-2]:
+    n = windows_per_period(case)
+    whole = len(tip) // n
+    if whole < 2:
+        return None
+    before = np.abs(complete_periods(tip[: whole * n], n)[-2]).max()
+    since = np.abs(tip[(whole - 1) * n :]).max()
+    if since > STEADY_GROWTH * before:
         return None
     return (
-        f"after {len(amplitudes)} whole periods of a steady {amplitudes[-1] * 1e3:.1f} mm tail "
-        "swing: the motion itself folds this mesh, so the point is not rerun"
+        f"after {whole} whole periods of a steady {before * 1e3:.1f} mm tail swing: the "
+        "motion itself folds this mesh, so the point is not rerun"
     )
 
 

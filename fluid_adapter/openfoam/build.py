@@ -123,6 +123,7 @@ def build_openfoam_participant(
         )
     else:
         chosen = RelaunchDriver(run, dt, prelaunch=_prelaunch(case, processes))
+    windows_per_period = max(1, round(1.0 / (case.actuation.frequency_hz * dt)))
     participant = OpenFoamParticipant(
         run,
         chosen,
@@ -130,7 +131,7 @@ def build_openfoam_participant(
         n_windows=n_windows,
         flow_surfaces=flow_surfaces(case, interface),
         flow_from=flow_from,
-        drift_reset_windows=max(1, round(1.0 / (case.actuation.frequency_hz * dt))),
+        drift_reset_windows=windows_per_period,
     )
     participant.mesh_quality = quality
     return participant

@@ -23,17 +23,13 @@ from numpy.typing import NDArray
 
 from . import runner
 from .casefiles import MOTION_FIELD
-from .drivers import run_mesh_motion
-from .errors import MeshFoldedError
 from .fishmesh import TankGeometry
 from .foamio import read_points
 from .foamrun import FoamRun, numeric_dirs
+from .rest_mesh import move_from_rest
 
 # fields of the mesh motion: this run's own (cellMotionU is a volume field mapFields would map)
 MOTION_FIELDS = frozenset({MOTION_FIELD, "cellMotionU"})
-# steps of the mesh's move to the start (one would do: the motion solver is linear in the
-# plate's velocity; a few keep each step's cells near their last shape)
-RAMP_WINDOWS = 4
 # windows a CFD started this way is off its force before it repeats the source's last period
 # (coarse fish, 3 Hz: within 0.1 % of the swing from window 4 on at 40 windows per period;
 # 2 % in window 4 and 0.3 % from window 5 on at 20)
@@ -88,14 +84,7 @@ def place(run: FoamRun, displacement: NDArray, dt: float, source: FlowSource) ->
     ``displacement`` (interface points), the mesh moved with it, and the flow of ``source``
     mapped on. pimpleFoam starts from it with a first-order time step: its first windows'
     forces zig-zag about the source's (START_UP_WINDOWS)."""
-    end = RAMP_WINDOWS * dt
-    checks = run_mesh_motion(run, lambda t: displacement * t / end, dt, RAMP_WINDOWS)
-    if checks and checks[-1].min_volume_m3 <= 0:  # inside-out cells (poor ones run)
-        raise MeshFoldedError(
-            f"{run.path}: the start's plate shape folds this mesh (min cell volume "
-            f"{checks[-1].min_volume_m3:.3g} m3, log.moveDynamicMesh)"
-        )
-    moved = run.time_folder(end, dt)
+    moved = move_from_rest(run, displacement, dt, "the start's plate shape")
     for root in run.data_roots():  # the moved mesh is time 0's
         (root / "0" / "polyMesh").mkdir(exist_ok=True)
         shutil.copyfile(root / moved / "polyMesh" / "points", root / "0" / "polyMesh" / "points")

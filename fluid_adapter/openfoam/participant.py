@@ -66,6 +66,11 @@ class OpenFoamParticipant:
         self._mesh_checked_at = 0  # the last window start whose moved mesh was checked
 
     @property
+    def mesh_resets(self) -> list[tuple[int, float]]:
+        """The moved mesh's resets so far: (fluid window, largest point shift m)."""
+        return list(self.drift.resets)
+
+    @property
     def acceleration_stencil(self) -> tuple[float, ...]:
         """How pimpleFoam differentiates the window-end displacements u_k it is given, as
         a = sum_j c_j u_(n+1-j) / dt^2 (one fluid step per window): the plate's normal
@@ -223,6 +228,9 @@ class OpenFoamParticipant:
             "t": self.time,
             "displacement": self.driver.displacement.copy(),
             "input_displacement": self._displacement.copy(),
+            # the mesh resets' schedule: a resumed run keeps its pace and its record
+            "drift_next_at": self.drift.next_at,
+            "drift_resets": np.array(self.drift.resets, dtype=float).reshape(-1, 2),
         }
         if self._loads is not None:
             state.update(
@@ -238,6 +246,10 @@ class OpenFoamParticipant:
         u = np.array(state["displacement"], dtype=float)
         self.driver = self._driver_at(t, u)
         self._displacement = np.array(state["input_displacement"], dtype=float)
+        if "drift_next_at" in state:  # (absent in a checkpoint from before the resets)
+            self.drift.next_at = int(state["drift_next_at"])
+            resets = np.asarray(state["drift_resets"], dtype=float).reshape(-1, 2)
+            self.drift.resets = [(int(w), float(shift)) for w, shift in resets]
         self._loads = None
         if "face_forces" in state:
             self._loads = SurfaceLoads(

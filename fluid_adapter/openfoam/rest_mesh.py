@@ -7,11 +7,11 @@ checkMesh fails; a coupled 1 Hz run folded its cells in period 6. The plate's ow
 exact: each window ends on its displacement.
 
 ``reset_points`` replaces a time folder's points with those of the undeformed mesh moved to the
-plate's current shape in RAMP_WINDOWS steps (``moveDynamicMesh`` in a scratch copy of the case,
-as a displaced start does, flow_start.py). The plate and the walls keep their points; the inner
-points jump back by the drift, and the flow fields stay with their cells. ``DriftSchedule``
-says when: after the first period, then as often as the measured drift rate needs to stay
-under DRIFT_LIMIT_M, so a small swing costs one reset per run.
+plate's current shape in RAMP_WINDOWS steps (``moveDynamicMesh`` in a scratch copy of the case;
+a displaced start moves its own mesh the same way, flow_start.py). The plate and the walls keep
+their points; the inner points jump back by the drift, and the flow fields stay with their
+cells. ``DriftSchedule`` says when: after the first period, then as often as the fastest drift
+measured needs to stay under DRIFT_LIMIT_M, but at most once a period.
 """
 
 from __future__ import annotations
@@ -28,14 +28,31 @@ from numpy.typing import NDArray
 
 from .drivers import run_mesh_motion
 from .errors import MeshFoldedError
-from .flow_start import RAMP_WINDOWS
 from .foamio import read_points
 from .foamrun import FoamRun
 
+# steps of a move from rest (one would do: the motion solver is linear in the plate's
+# velocity; a few keep each step's cells near their last shape)
+RAMP_WINDOWS = 4
 # drift allowed between resets: an eighth of the drift at which checkMesh first failed (8 mm,
 # default level, 31 mm of tail, the module docstring)
 DRIFT_LIMIT_M = 1e-3
-_SKIPPED = ("boundaryData", "polyMesh")  # rewritten (samples) or moved (time 0's points)
+SAMPLES = "boundaryData"  # constant/<this>: the scratch run writes its own
+
+
+def move_from_rest(run: FoamRun, displacement: NDArray, dt: float, what: str) -> str:
+    """Move ``run``'s mesh (at rest at time 0) to the plate ``displacement`` in RAMP_WINDOWS
+    steps, mesh alone; returns the moved time folder's name. ``what`` names the shape in the
+    error a fold raises."""
+    end = RAMP_WINDOWS * dt
+    checks = run_mesh_motion(run, lambda t: displacement * (t / end), dt, RAMP_WINDOWS)
+    if checks and checks[-1].min_volume_m3 <= 0:  # inside-out cells (poor ones run)
+        raise MeshFoldedError(
+            f"{run.path}: {what} folds this mesh even moved there from rest (min cell volume "
+            f"{checks[-1].min_volume_m3:.3g} m3, log.moveDynamicMesh); a smaller drive or a "
+            "stiffer design keeps the mesh whole"
+        )
+    return run.time_folder(end, dt)
 
 
 def reset_points(run: FoamRun, time_name: str, displacement: NDArray, dt: float) -> float:
@@ -46,15 +63,8 @@ def reset_points(run: FoamRun, time_name: str, displacement: NDArray, dt: float)
             _scratch_case(run, Path(scratch)), run.interface, run.settings, run.processes
         )
         rest.init_samples()
-        end = RAMP_WINDOWS * dt
-        checks = run_mesh_motion(rest, lambda t: displacement * (t / end), dt, RAMP_WINDOWS)
-        if checks and checks[-1].min_volume_m3 <= 0:
-            raise MeshFoldedError(
-                f"{run.path}: the plate's shape at t = {time_name} s folds even a mesh moved "
-                f"there from rest (min cell volume {checks[-1].min_volume_m3:.3g} m3); a "
-                "smaller drive or a stiffer design keeps the mesh whole"
-            )
-        moved = rest.time_folder(end, dt)
+        what = f"the plate's shape at fluid time {time_name} s"
+        moved = move_from_rest(rest, displacement, dt, what)
         shift = 0.0
         for root, rest_root in zip(run.data_roots(), rest.data_roots(), strict=True):
             target = root / time_name / "polyMesh" / "points"
@@ -66,24 +76,26 @@ def reset_points(run: FoamRun, time_name: str, displacement: NDArray, dt: float)
 
 
 def _scratch_case(run: FoamRun, folder: Path) -> Path:
-    """The case at rest: system/, constant/ and 0/ of every rank, without the samples (the
-    scratch run writes its own) or a displaced start's time-0 points."""
-    ignore = shutil.ignore_patterns(*_SKIPPED)
+    """The case at rest: system/, and constant/ and 0/ of every rank, without the samples
+    or a displaced start's time-0 points. Decomposed, the root's constant/ gives the
+    dictionaries only (the ranks have their own meshes)."""
     shutil.copytree(run.path / "system", folder / "system")
     for root in run.data_roots():
         into = folder / root.relative_to(run.path)
-        shutil.copytree(root / "constant", into / "constant", ignore=_only_top(_SKIPPED[0]))
-        shutil.copytree(root / "0", into / "0", ignore=ignore)
-    if run.processes > 1:  # the root's constant/ holds the samples the ranks read
-        shutil.copytree(run.path / "constant", folder / "constant", ignore=_only_top(_SKIPPED[0]))
+        shutil.copytree(root / "constant", into / "constant", ignore=_top(SAMPLES))
+        shutil.copytree(root / "0", into / "0", ignore=shutil.ignore_patterns("polyMesh"))
+    if run.processes > 1:
+        shutil.copytree(
+            run.path / "constant", folder / "constant", ignore=_top(SAMPLES, "polyMesh")
+        )
     return folder
 
 
-def _only_top(name: str):
-    """Ignore ``name`` directly inside the copied folder only (constant/polyMesh is kept)."""
+def _top(*names: str):
+    """Ignore ``names`` directly inside constant/ only (constant/polyMesh/... is kept)."""
 
     def ignore(directory: str, entries: list[str]) -> set[str]:
-        return {name} & set(entries) if Path(directory).name == "constant" else set()
+        return set(names) & set(entries) if Path(directory).name == "constant" else set()
 
     return ignore
 
@@ -102,8 +114,10 @@ def _replace(source: Path, target: Path) -> None:
 
 @dataclass
 class DriftSchedule:
-    """When to reset: ``first`` windows after the start, then every interval the last measured
-    drift rate allows under DRIFT_LIMIT_M (at least ``first``, at most ``longest``)."""
+    """When to reset: ``first`` windows after the start, then as often as the fastest drift
+    measured so far allows under DRIFT_LIMIT_M, but at most every ``first`` windows (a
+    period) and at least every ``longest``. The fastest, not the last: a reset repeated on a
+    folder already reset (a resumed run) measures no drift."""
 
     first: int
     longest: int
@@ -111,14 +125,14 @@ class DriftSchedule:
     resets: list[tuple[int, float]] = field(default_factory=list)  # (window, shift m)
 
     def __post_init__(self) -> None:
-        self.next_at = self.first
+        self.next_at = self.next_at or self.first
 
     def due(self, window: int) -> bool:
-        return self.first > 0 and window >= self.next_at and window > 0
+        return self.first > 0 and window >= self.next_at
 
     def record(self, window: int, shift_m: float) -> None:
-        since = window - (self.resets[-1][0] if self.resets else 0)
         self.resets.append((window, shift_m))
-        rate = shift_m / max(since, 1)
+        starts = [0] + [w for w, _ in self.resets[:-1]]
+        rate = max(s / max(w - w0, 1) for (w, s), w0 in zip(self.resets, starts, strict=True))
         allowed = self.longest if rate <= 0 else math.floor(DRIFT_LIMIT_M / rate)
         self.next_at = window + min(max(allowed, self.first), self.longest)
