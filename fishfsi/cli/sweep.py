@@ -463,7 +463,7 @@ def folded_on_a_steady_swing(folder: Path, case: Case) -> str | None:
     stayed within STEADY_GROWTH of its reach over the period before."""
     from fsi_orchestrator.results import RESULTS_FILE
 
-    from .run import complete_periods, windows_per_period
+    from .run import windows_per_period
 
     try:
         with h5py.File(folder / RESULTS_FILE, "r", locking=False) as h5:
@@ -474,7 +474,7 @@ def folded_on_a_steady_swing(folder: Path, case: Case) -> str | None:
     whole = len(tip) // n
     if whole < 2:
         return None
-    before = np.abs(complete_periods(tip[: whole * n], n)[-2]).max()
+    before = np.abs(tip[(whole - 2) * n : (whole - 1) * n]).max()  # second-to-last period
     since = np.abs(tip[(whole - 1) * n :]).max()
     if since > STEADY_GROWTH * before:
         return None
