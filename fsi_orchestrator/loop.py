@@ -39,6 +39,9 @@ from .results import (
     write_failure,
 )
 
+# a stop before the first checkpoint: nothing to continue (fsi-sweep words it for a point)
+NO_CHECKPOINT = "no checkpoint was written yet: run it again with --overwrite"
+
 
 class ResumeError(RuntimeError):
     """No usable checkpoint to resume from."""
@@ -232,7 +235,7 @@ class WindowLoop:
         first = (str(err).splitlines() or [type(err).__name__])[0]
         where = f"window {window} did not finish: {first}"
         if self._checkpointed is None:
-            return f"{where}; no checkpoint was written yet: run it again with --overwrite"
+            return f"{where}; {NO_CHECKPOINT}"
         return (
             f"{where}; the checkpoint after window {self._checkpointed} is kept: "
             "continue with --resume"

@@ -465,6 +465,43 @@ def test_sigterm_stops_the_sweep_with_its_rows_kept_and_says_resume(tmp_path, mo
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
 
 
+def test_a_point_stopped_before_its_first_checkpoint_says_resume_not_overwrite(
+    tmp_path, monkeypatch, capsys
+):
+    """fsi-run tells a run stopped before its first checkpoint to start again with --overwrite;
+    in a sweep that flag would throw the finished points away, and --resume reruns the point."""
+    from fsi_orchestrator.loop import NO_CHECKPOINT
+    from fsi_orchestrator.participant import ParticipantStopped
+
+    stops = {
+        4.0: KeyboardInterrupt(f"window 1 did not finish: pimpleFoam stopped; {NO_CHECKPOINT}")
+    }
+
+    def stub(case, output, resume, show_progress):
+        if stop := stops.pop(case.actuation.frequency_hz, None):
+            raise stop
+        return {"tip_amplitude_m": 1e-3}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
+    args += ["--method", "transient", "--output", str(out)]
+    assert sweep_cli.main(args) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err.strip() == (
+        "interrupted: sine 4 Hz: window 1 did not finish: pimpleFoam stopped; no checkpoint "
+        "yet: --resume runs it again"
+    )
+    assert points(table(out)) == [("sine", 2.0)]
+    # a solver stopped outside the windows keeps its kind: the line says what is kept
+    stops[6.0] = ParticipantStopped("pimpleFoam was stopped by SIGTERM in c")
+    assert sweep_cli.main([*args, "--resume"]) == EXIT_INTERRUPTED
+    assert capsys.readouterr().err.strip() == (
+        "interrupted: sine 6 Hz: pimpleFoam was stopped by SIGTERM in c; results so far are "
+        "kept; continue with --resume"
+    )
+    assert points(table(out)) == [("sine", 2.0), ("sine", 4.0)]
+
+
 def test_sigterm_stops_a_linear_sweep_of_a_fish_in_the_tank_in_one_line(tmp_path):
     """The potential flow's gmsh mesher left SIGTERM at its C default, and a linear sweep was
     killed without a word (exit 143): the handler is put back after meshing."""

@@ -177,7 +177,7 @@ def transient_sweep(
     (SweepTable.rows), whose windows per period a higher frequency starts at."""
     from fluid_adapter.openfoam.errors import MeshFoldedError
     from fsi_orchestrator.convergence import CouplingDivergenceError
-    from fsi_orchestrator.loop import AFRESH, ResumeError
+    from fsi_orchestrator.loop import AFRESH, NO_CHECKPOINT, ResumeError
     from fsi_orchestrator.results import CHECKPOINT_FILE
     from solid_adapter.solvers import SolverError
 
@@ -281,6 +281,10 @@ def transient_sweep(
                 notes.insert(0, "started from rest")
             status = f"ok ({'; '.join(notes)})" if notes else "ok"
             learned = folder
+        except KeyboardInterrupt as err:  # --overwrite would throw the finished points away
+            if text := str(err).replace(NO_CHECKPOINT, "no checkpoint yet: --resume runs it again"):
+                err.args = (f"{waveform.value} {f:g} Hz: {text}",)
+            raise
         except (SolverError, RuntimeError) as err:
             summary, status = {}, f"failed: {err}".splitlines()[0]
             if on_row is None:
