@@ -1,7 +1,9 @@
 """The fast model against OpenFOAM over a frequency curve: run time against error.
 
 The fast model (``fsi-sweep --method linear``: potential flow in the tank, the edge drag
-fitted to OpenFOAM, Lighthill's thrust on its motion) is run at the frequencies and waveforms
+fitted to OpenFOAM, Lighthill's thrust on its motion with the shedding efficiency fitted to
+OpenFOAM, ``fluid.thrust_shedding_kc``; ``--set fluid.thrust_shedding_kc=0`` for Lighthill's
+alone) is run at the frequencies and waveforms
 of OpenFOAM's transient curves of the same case, and each point's tail amplitude and mean
 thrust are set beside OpenFOAM's periodic estimate. Without sweep folders the reference is
 benchmarks/data/openfoam_held_fish_coarse.toml, the main job's scene on the coarse level
@@ -110,7 +112,7 @@ def fast_curve(case: Path, sets: list[str], points) -> tuple[dict, float]:
                 for row in csv.DictReader(table):
                     rows[(waveform, float(row["frequency_hz"]))] = {
                         "tail_m": float(row["tip_amplitude_m"]),
-                        "thrust_n": float(row["slender_body_mean_thrust_n"]),
+                        "thrust_n": float(row["mean_thrust_n"]),  # with the shedding
                     }
     return rows, wall
 

@@ -16,7 +16,8 @@ The fast model throughout: potential flow in the tank (coarse levels), with the 
 fitted to OpenFOAM as the fluid damping (fluid_adapter/drag.py). Amplitudes are those of
 `fsi-sweep --method linear`: the linear periodic response about the mean-voltage equilibrium,
 with the drag linearized about it. Thrust is Lighthill's slender-body estimate on that
-motion.
+motion, each harmonic's share weighed by the shedding efficiency fitted to OpenFOAM
+(fluid.thrust_shedding_kc).
 
     .venv/bin/python benchmarks/seed_validation.py [--json] [--write-docs]
 
@@ -134,6 +135,7 @@ class FastModel:
             h,
             density_kg_m3=case.fluid.density_kg_m3,
             period_s=1 / f,
+            shedding_kc=case.fluid.thrust_shedding_kc,
         )
         return {"tip_mm": 1e3 * float(np.ptp(h[:, -1]) / 2), "thrust_n": float(thrust)}
 
@@ -223,14 +225,38 @@ def calibrate(fast: FastModel) -> dict:
     length = float(result.x)
     w = fits[length][0] if length in fits else best_spacing(fast, length)[0]
     model = calibration_pair(fast, w, length)
+    # the two amplitudes cannot both be met, and along a valley of (W, held length) they are
+    # missed alike (17-22 mm held within 2 % of the least misfit): the frozen values stay
+    # unless the refit misses clearly less, so a rerun does not move every case by a step
+    # the search took along the valley
+    frozen = load_case(SEED / "amplitude_3Hz")
+    w0, length0 = frozen.actuation.electrode_spacing_m, frozen.boundary.clamp_length_m
+    at_frozen = calibration_pair(fast, w0, length0)
+    refit = {"electrode_spacing_m": w, "clamp_length_m": length, "misfit": _misfit(model)}
+    kept = _misfit(at_frozen) <= (1 + KEEP_FROZEN) * refit["misfit"]
+    if kept:
+        w, length, model = w0, length0, at_frozen
     return {
         "core_modulus_pa": modulus,
         "electrode_spacing_m": w,
         "clamp_length_m": length,
         "sine_3hz_mm": float(model[0]),
         "square_1hz_mm": float(model[1]),
+        "misfit": _misfit(model),
+        "frozen_kept": kept,
+        "refit": refit,
         "tried_lengths_m": sorted(fits),
     }
+
+
+# the frozen calibration stays while its misfit is within this fraction of the refit's
+KEEP_FROZEN = 0.02
+
+
+def _misfit(model_mm: np.ndarray) -> float:
+    """Squared log misses of the two measured amplitudes (as best_spacing's)."""
+    measured = np.log([MEASURED_3HZ_SINE_MM, MEASURED_1HZ_SQUARE_MM])
+    return float(np.sum((np.log(model_mm) - measured) ** 2))
 
 
 def predictions(fast: FastModel, w: float, length: float) -> dict:
@@ -330,6 +356,22 @@ def mesh_convergence(fast: FastModel, w: float) -> list[dict]:
     return rows
 
 
+def _refit_note(cal: dict) -> str:
+    r = cal["refit"]
+    refit = (
+        f"This run's refit lands at W = {1e3 * r['electrode_spacing_m']:.3f} mm and "
+        f"{1e3 * r['clamp_length_m']:.1f} mm held (misfit {r['misfit']:.4f}, the squared log "
+        f"misses of the two amplitudes)"
+    )
+    if cal["frozen_kept"]:
+        return (
+            f"{refit}; the frozen values miss by {cal['misfit']:.4f}, within "
+            f"{100 * KEEP_FROZEN:.0f} %, and stay: the two amplitudes are missed alike along a "
+            "valley of spacing and held length."
+        )
+    return f"{refit}, more than {100 * KEEP_FROZEN:.0f} % below the frozen values': refreeze them."
+
+
 def _pct(model: float, reference: float) -> str:
     return f"{100 * (model / reference - 1):+.0f} %"
 
@@ -358,6 +400,8 @@ def report(
         f"| held length of the head (`boundary.clamp_length_m`) | "
         f"{1e3 * HELD_BOUNDS_M[0]:.0f}-{1e3 * HELD_BOUNDS_M[1]:.0f} mm | "
         f"{1e3 * cal['clamp_length_m']:.1f} mm | both amplitudes |",
+        "",
+        _refit_note(cal),
         "",
         "| experiment | seed's simulation | measured | model | error | role |",
         "|---|---|---|---|---|---|",
@@ -396,7 +440,7 @@ def report(
         f"{at[5] / at[3]:.2f} | - | prediction |",
         "",
         "Thrust curve of the held original fish (square wave, slender-body thrust on the "
-        "fast model's motion):",
+        "fast model's motion with the shedding efficiency, `fluid.thrust_shedding_kc`):",
         "",
         "| f [Hz] | " + " | ".join(f"{r['frequency_hz']:g}" for r in curve) + " |",
         "|---|" + "---|" * len(curve),

@@ -45,6 +45,16 @@ whole periods the unsteady term has zero mean, leaving
 For a constant height this is Lighthill's (1960, J. Fluid Mech. 9, 305) reactive thrust. At V = 0
 the theory's assumption |dh/dt| << V (5-6) does not hold: read it as the V -> 0 reactive estimate.
 
+Vortex shedding at small amplitude (``shedding_kc``): the reactive thrust assumes the vorticity
+shed at the trailing edge leaves it. At small Keulegan-Carpenter numbers KC = 2 pi a / h_L (a the
+trailing edge's amplitude, h_L its height) the shed vortices stay at the edge, and OpenFOAM's
+thrust on the held fish's own motion is 0.43-0.86 of Lighthill's, growing with KC (1-25 Hz, two
+mesh levels). :func:`mean_thrust_from_shell` with ``shedding_kc`` = KC0 weighs each harmonic's
+share of the mean thrust (over whole periods the shares add up exactly: the thrust is quadratic
+in h and harmonics are orthogonal) by KC / (KC + KC0) on that harmonic's own KC; KC0 is fitted
+to OpenFOAM (SHEDDING_KC, benchmarks/fast_thrust_shedding.py). A square wave's higher harmonics
+move the fin fast with little amplitude: small KC, little thrust.
+
 Discretisation: samples at t0 + k dt, k = 0..n-1, spanning whole periods (the motion is periodic
 with period n dt); time derivatives and the time shift of w* are spectral (exact for band-limited
 motion), h_x is second order on the possibly non-uniform x grid, int dx is the trapezoidal rule,
@@ -59,6 +69,19 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.integrate import trapezoid
+
+# KC0 of the shedding efficiency KC / (KC + KC0): fitted to OpenFOAM's thrust on the held fish's
+# own sine motion, 1-25 Hz, coarse and default levels (benchmarks/fast_thrust_shedding.py)
+SHEDDING_KC = 0.65
+
+
+def shedding_efficiency(kc: ArrayLike, kc0: float) -> NDArray:
+    """The share KC / (KC + KC0) of the reactive thrust that a motion of Keulegan-Carpenter
+    number KC makes (1 for KC0 = 0: Lighthill's thrust as it is)."""
+    kc = np.asarray(kc, dtype=float)
+    if kc0 == 0.0:
+        return np.ones_like(kc)
+    return kc / (kc + kc0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -134,8 +157,10 @@ def mean_thrust_from_shell(
     periods: int = 1,
     added_mass_coefficient: float = 1.0,
     speed_m_s: float = 0.0,
+    shedding_kc: float = 0.0,
 ) -> float:
-    """Mean thrust (N, + toward the head) over the last ``periods`` periods of shell output.
+    """Mean thrust (N, + toward the head) over the last ``periods`` periods of shell output;
+    ``shedding_kc``: KC0 of the shedding efficiency (0: Lighthill's thrust as it is).
 
     ``times`` (m,) s uniformly spaced, the step dividing ``period_s``; the displacements are
     either the midline z displacements (m, n_x) at nodes ``xs`` (n_x,) m (nodes at y = 0, nose to
@@ -151,23 +176,59 @@ def mean_thrust_from_shell(
         )
     dt, n_keep = _last_periods(t, period_s, periods)
     window = disp[-n_keep:]
+    if shedding_kc < 0 or not np.isfinite(shedding_kc):
+        raise ValueError(f"`shedding_kc` must be finite and >= 0, got {shedding_kc}")
     if disp.ndim == 2:
-        history = slender_body_thrust(
-            xs,
-            half_height,
-            window,
-            dt,
-            density_kg_m3=density_kg_m3,
-            added_mass_coefficient=added_mass_coefficient,
-            speed_m_s=speed_m_s,
+
+        def mean(h: NDArray) -> float:
+            return slender_body_thrust(
+                xs,
+                half_height,
+                h,
+                dt,
+                density_kg_m3=density_kg_m3,
+                added_mass_coefficient=added_mass_coefficient,
+                speed_m_s=speed_m_s,
+            ).mean_thrust_n
+
+        if shedding_kc == 0.0:
+            return mean(window)
+        tail_height = 2 * float(np.asarray(half_height, dtype=float)[-1])
+        return sum(
+            share * mean(h) for share, h in _shed_harmonics(window, tail_height, shedding_kc)
         )
-        return history.mean_thrust_n
     if speed_m_s != 0.0:
         raise ValueError("a tail-tip history alone needs `speed_m_s` = 0; pass the midline")
-    tail_area = added_mass_per_length(
-        np.asarray(half_height, dtype=float)[-1], density_kg_m3, added_mass_coefficient
+    b_tail = float(np.asarray(half_height, dtype=float)[-1])
+    tail_area = added_mass_per_length(b_tail, density_kg_m3, added_mass_coefficient)
+    return float(
+        sum(
+            share * tail_area * np.mean(periodic_derivative(h, dt) ** 2) / 2
+            for share, h in _shed_harmonics(window, 2 * b_tail, shedding_kc)
+        )
     )
-    return float(tail_area * np.mean(periodic_derivative(window, dt) ** 2) / 2)
+
+
+def _shed_harmonics(h: NDArray, tail_height_m: float, kc0: float):
+    """(shedding efficiency, samples) of each Fourier component of ``h`` (samples over whole
+    periods along axis 0; the last column, or a 1-D history, is the trailing edge): the mean
+    (weight 1) and every frequency with motion, on its own trailing-edge KC."""
+    n = h.shape[0]
+    spectrum = np.fft.rfft(h, axis=0)
+    tail = spectrum if h.ndim == 1 else spectrum[:, -1]
+    for j in range(len(spectrum)):
+        if j and not np.any(spectrum[j]):
+            continue
+        one = np.zeros_like(spectrum)
+        one[j] = spectrum[j]
+        # a component's amplitude: 2 |F_j| / n (the Nyquist bin and the mean |F_j| / n)
+        amplitude = abs(tail[j]) / n * (1 if j == 0 or 2 * j == n else 2)
+        share = (
+            1.0
+            if j == 0
+            else float(shedding_efficiency(2 * np.pi * amplitude / tail_height_m, kc0))
+        )
+        yield share, np.fft.irfft(one, n, axis=0)
 
 
 def periodic_derivative(f: ArrayLike, dt_s: float) -> NDArray:

@@ -280,21 +280,24 @@ def test_the_pimple_correctors_come_from_the_case(tmp_path):
 
 def test_pimple_settings_do_not_regenerate_the_fluid_folder(tmp_path):
     """The PIMPLE keys are left out of the generated folder's fingerprint (a reused folder gets
-    its fvSolution rewritten instead of a new mesh), so a folder stamped before the keys
-    existed (a run resumed across versions) keeps its key; a physical key still changes it."""
+    its fvSolution rewritten instead of a new mesh), and so is the fast thrust's KC0, which
+    the folder does not use: a folder stamped before the keys existed (a run resumed across
+    versions) keeps its key; a physical key still changes it."""
     import dataclasses
     import hashlib
     import json
 
-    from fluid_adapter.openfoam.build import SOLUTION_KEYS, fingerprint
+    from fluid_adapter.openfoam.build import SOLUTION_KEYS, UNUSED_KEYS, fingerprint
     from fsi_orchestrator.case.loader import case_from_dict
 
     case = case_from_dict({"fluid": {"model": "openfoam"}}, tmp_path)
     fluid = {"model": "openfoam", "outer_correctors": 4, "non_orthogonal_correctors": 2}
+    fluid |= {"thrust_shedding_kc": 0.0}
     assert fingerprint(case_from_dict({"fluid": fluid}, tmp_path), 1.0, 1) == fingerprint(
         case, 1.0, 1
     )
-    old_fluid = {k: v for k, v in dataclasses.asdict(case.fluid).items() if k not in SOLUTION_KEYS}
+    later = SOLUTION_KEYS + UNUSED_KEYS
+    old_fluid = {k: v for k, v in dataclasses.asdict(case.fluid).items() if k not in later}
     old = {"geometry": dataclasses.asdict(case.geometry), "fluid": old_fluid}
     old |= {"mesh_scale": 1.0, "processes": 1}
     stamped = hashlib.sha256(json.dumps(old, sort_keys=True, default=str).encode()).hexdigest()

@@ -237,6 +237,24 @@ def test_saved_state_resumes_a_killed_run(setup, relaunch_history):
     assert relative(resumed, relaunch_history[0][4:6]) < 1e-6
 
 
+def test_a_checkpoint_whose_flow_is_gone_does_not_load(setup):
+    """A fluid folder generated afresh (its settings changed) holds no flow at the
+    checkpoint's time: the state is refused at once (the loop's one-line ResumeError), not
+    when the next window finds no start folder."""
+    case, _, motion = setup
+    p = participant(setup, "lost", FluidDriver.RELAUNCH)
+    drive(p, motion, range(1, 3))
+    state = p.save_state()
+    p.finalize()
+    p.run.remove_times({"0"})
+    fresh = build_openfoam_participant(
+        case, p.run.path, dt=DT, n_windows=N, mesh_scale=SCALE, driver=FluidDriver.RELAUNCH
+    )
+    with pytest.raises(ValueError, match="holds no flow at the checkpoint's t = 0.0166667 s"):
+        fresh.load_state(state)
+    fresh.finalize()
+
+
 def test_prescribed_windows_in_one_launch_continue_as_relaunched_windows(setup, relaunch_history):
     """The coupling's lead-in hands the fluid its prescribed windows at once (``follow``): one
     pimpleFoam launch instead of one per window. Its forces are the relaunched ones (as a

@@ -145,12 +145,14 @@ def test_fsi_run_json_carries_the_estimate_and_windows_per_period(tmp_path):
 
 
 def test_a_fast_fluid_runs_thrust_has_its_per_period_figures_and_estimate(tmp_path):
-    """The slender-body thrust over each complete period (the last is the run's thrust) and
+    """The fast thrust over each complete period (the last is the run's thrust) and
     its periodic estimate, as OpenFOAM's thrust has: a sweep row then holds no NaN for it."""
     summary = vacuum_fish_summary(tmp_path / "run", 3, "fluid.model=slender_body")
     thrust = summary["mean_thrust_per_period_n"]
     assert len(thrust) == 3 and summary["thrust_source"] == "slender_body"
-    assert thrust[-1] == summary["mean_thrust_n"] == summary["slender_body_mean_thrust_n"]
+    assert thrust[-1] == summary["mean_thrust_n"]
+    # the run's thrust has the shedding efficiency; Lighthill's stays beside it, larger
+    assert 0 < summary["mean_thrust_n"] < summary["slender_body_mean_thrust_n"]
     found = estimate(thrust)
     assert summary["mean_thrust_periodic_n"] == found.value
     assert summary["mean_thrust_periodic_uncertainty_n"] == found.uncertainty

@@ -87,8 +87,9 @@ def thrust_curve(fast):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="the square wave's slender-body thrust is 0.33-0.60 N over 5-22 Hz and peaks at "
-    "25 Hz (0.71 N), on the held fish's second wet mode (docs/validation.md)",
+    reason="the held fish's square-wave thrust (with the shedding efficiency) is 0.16 N at "
+    "5-7 Hz, 40-130 mN over 13-22 Hz and highest at 25 Hz (0.17 N), on its second wet mode "
+    "(docs/validation.md)",
 )
 def test_thrust_peaks_where_the_rig_measured_it(thrust_curve):
     """Fig. 4.6: the held fish's thrust peaks at 18 Hz (target 15-20 Hz)."""
@@ -107,13 +108,13 @@ def test_the_thrust_curve_is_finite_and_positive_and_the_harmonics_are_damped(th
     assert thrust_curve[18] < 0.5 * ringing
 
 
-@pytest.mark.xfail(strict=True, reason="slender-body thrust at the peak 0.71 N, rig <= 0.107 N")
+@pytest.mark.xfail(strict=True, reason="fast thrust at the peak 0.17 N, rig <= 0.107 N")
 def test_peak_thrust_within_what_the_rig_could_read(thrust_curve):
     """Sec. 4.3.1: 0.5 N load cell x 45 / 210 mm lever = 0.107 N at most."""
     assert max(thrust_curve.values()) <= 0.107
 
 
-@pytest.mark.xfail(strict=True, reason="model 5 Hz / 3 Hz thrust 1.63; measured below 1")
+@pytest.mark.xfail(strict=True, reason="model 5 Hz / 3 Hz thrust 1.66; measured below 1")
 def test_5hz_thrust_below_3hz_thrust(thrust_curve):
     """Sec. 4.3.2: the 5 Hz thrust is below the 3 Hz thrust."""
     assert thrust_curve[5] < thrust_curve[3]

@@ -461,7 +461,7 @@ def test_each_transient_point_starts_from_the_jacobian_the_last_one_learned(tmp_
         seen.append(case.coupling.jacobian_from)
         if case.actuation.frequency_hz == 4.0:
             raise RuntimeError("pimpleFoam crashed")
-        output.mkdir(parents=True)
+        output.mkdir(parents=True, exist_ok=True)  # the sweep's lock is in it already
         (output / "checkpoint.h5").write_bytes(b"")
         return {"tip_amplitude_m": 1e-3, "mean_thrust_n": 1e-3}
 
@@ -497,3 +497,12 @@ def test_a_linear_sweep_in_vacuum_pushes_nothing_and_says_when_it_leaves_small_d
     assert rows[0]["tip_amplitude_m"] < 0.2 * 0.087 < rows[1]["tip_amplitude_m"]
     notes = [line for line in out.err.splitlines() if line.startswith("note:")]
     assert len(notes) == 1 and "exceeds a fifth of the plate's 87 mm at 1 point(s)" in notes[0]
+
+
+def test_the_fast_thrusts_kc0_is_not_part_of_an_openfoam_sweeps_identity():
+    """A transient OpenFOAM sweep's rows hold the CFD's thrust: KC0 of the fast thrust is not
+    in its identity, so a sweep made before the key resumes; a linear sweep's rows carry it."""
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz")
+    openfoam = sweep_cli.sweep_identity(case, "transient")["case"]["fluid"]
+    assert "thrust_shedding_kc" not in openfoam and openfoam["model"] == "openfoam"
+    assert sweep_cli.sweep_identity(case, "linear")["case"]["fluid"]["thrust_shedding_kc"] == 0.65

@@ -52,9 +52,10 @@ def linear_frequencies_run(monkeypatch, interrupt_at: int | None = None) -> list
     ran: list[float] = []
 
     def spy(*args, **kwargs):
-        ran.append(round(1.0 / kwargs["period_s"], 9))
-        if interrupt_at is not None and len(ran) == interrupt_at:
-            raise KeyboardInterrupt
+        if kwargs.get("shedding_kc", 0.0) == 0.0:  # Lighthill's, once per point
+            ran.append(round(1.0 / kwargs["period_s"], 9))
+            if interrupt_at is not None and len(ran) == interrupt_at:
+                raise KeyboardInterrupt
         return real(*args, **kwargs)
 
     monkeypatch.setattr(slender_body, "mean_thrust_from_shell", spy)
@@ -502,6 +503,38 @@ def test_a_point_stopped_before_its_first_checkpoint_says_resume_not_overwrite(
     assert points(table(out)) == [("sine", 2.0), ("sine", 4.0)]
 
 
+def test_a_point_another_launch_is_running_is_left_to_it(tmp_path, monkeypatch, capsys):
+    """Two launches into one --output (a job submitted twice, a --resume while the first still
+    runs) ran the same point in the same folder, and its solver failed under the other. A
+    point whose folder another process holds is left to that one; a later --resume runs it."""
+    import fcntl
+
+    calls: list = []
+
+    def stub(case, output, resume, show_progress):
+        calls.append(output.name)
+        return {"tip_amplitude_m": 1e-3}
+
+    monkeypatch.setattr(run_cli, "run_dynamic", stub)
+    out = tmp_path / "sweep"
+    (out / "sine_4Hz").mkdir(parents=True)
+    other = os.open(out / "sine_4Hz" / ".running", os.O_CREAT | os.O_WRONLY)
+    fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)  # the other launch, running it
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
+    args += ["--method", "transient", "--output", str(out)]
+    try:
+        assert sweep_cli.main(args) == 0
+    finally:
+        os.close(other)
+    assert calls == ["sine_2Hz", "sine_6Hz"]
+    assert "note: sine 4 Hz: another fsi-sweep is running it in " in capsys.readouterr().err
+    assert points(table(out)) == [("sine", 2.0), ("sine", 6.0)]
+    calls.clear()
+    assert sweep_cli.main([*args, "--resume"]) == 0
+    assert calls == ["sine_4Hz"]
+    assert points(table(out)) == [("sine", f) for f in (2.0, 4.0, 6.0)]
+
+
 def test_sigterm_stops_a_linear_sweep_of_a_fish_in_the_tank_in_one_line(tmp_path):
     """The potential flow's gmsh mesher left SIGTERM at its C default, and a linear sweep was
     killed without a word (exit 143): the handler is put back after meshing."""
@@ -593,7 +626,7 @@ def test_a_nan_point_of_the_linear_sweep_fails_it_and_keeps_the_other_rows(
     rows = table(out)
     assert [r["status"] for r in rows] == [
         "ok",
-        "failed: slender_body_mean_thrust_n not finite (linear response)",
+        "failed: slender_body_mean_thrust_n, mean_thrust_n not finite (linear response)",
         "ok",
     ]
     assert float(rows[2]["tip_amplitude_m"]) > 0

@@ -144,16 +144,20 @@ def linear_sweep(
             times = np.arange(SAMPLES_PER_PERIOD + 1) / (SAMPLES_PER_PERIOD * f)
             h = response.dof_history(midline * 5 + 2, times)
             tip_z = response.dof_history(np.array([tip * 5 + 2]), times)[:, 0]
-            thrust = (
-                mean_thrust_from_shell(
-                    xs,
-                    half_height,
-                    times,
-                    h,
-                    density_kg_m3=case.fluid.density_kg_m3,
-                    period_s=1.0 / f,
-                    added_mass_coefficient=case.fluid.added_mass_coefficient,
-                )
+            thrusts = (
+                [
+                    mean_thrust_from_shell(
+                        xs,
+                        half_height,
+                        times,
+                        h,
+                        density_kg_m3=case.fluid.density_kg_m3,
+                        period_s=1.0 / f,
+                        added_mass_coefficient=case.fluid.added_mass_coefficient,
+                        shedding_kc=kc0,
+                    )
+                    for kc0 in (0.0, case.fluid.thrust_shedding_kc)
+                ]
                 if pushes
                 else None
             )
@@ -164,9 +168,11 @@ def linear_sweep(
             "status": "ok",
         }
         checked = ["tip_amplitude_m"]
-        if thrust is not None:
-            row["slender_body_mean_thrust_n"] = float(thrust)
-            checked.append("slender_body_mean_thrust_n")
+        if thrusts is not None:  # Lighthill's, and the fast model's with the shedding
+            row["slender_body_mean_thrust_n"] = float(thrusts[0])
+            row["mean_thrust_n"] = float(thrusts[1])
+            row["thrust_source"] = "slender_body"
+            checked += ["slender_body_mean_thrust_n", "mean_thrust_n"]
         if swim is not None and np.all(np.isfinite(h)):
             row.update(swim.row(times, h, f))
             checked += SWIMMING_KEYS

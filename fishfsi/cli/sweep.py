@@ -31,6 +31,7 @@ import argparse
 import contextlib
 import csv
 import dataclasses
+import fcntl
 import hashlib
 import io
 import json
@@ -204,127 +205,144 @@ def transient_sweep(
     learned = None  # the last finished point's output: its quasi-Newton Jacobian
     learned_iterated = None  # the same, of the last point rerun with iterated windows
     steady: dict[Waveform, tuple[float, int]] = {}  # (f, windows per period) it ran with
-    for index, (waveform, f) in enumerate(jobs):
-        if claims is not None and not claims.take(point_name(waveform, f)):
-            continue  # another rank runs it
-        folder = output / point_name(waveform, f)
-        point = with_drive(case, f, waveform)
-        if start_from is not None:
-            point = started_from(point, start_from / point_name(waveform, f), ndof)
-        if learned is not None:
-            point = chained(point, learned)
-        start = time.perf_counter()
-        iterated = with_iterated_windows(point)
-        if iterated is not None and learned_iterated is not None:
-            iterated = chained(iterated, learned_iterated)
-        # one solve per window steadies with longer windows: those tried before iterating;
-        # a higher frequency of the same waveform starts at the count a lower one needed
-        attempts = [point, *with_fewer_windows(point)]
-        needed = fewest_needed(steady.get(waveform), finished, waveform, f)
-        if resume and (folder / CHECKPOINT_FILE).is_file():
-            needed = None  # it continues at the count its checkpoint was written with
-        if needed is not None and f > needed[0]:
-            attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
-        if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
-            (folder / ITERATED_MARK).unlink(missing_ok=True)
-            (folder / WINDOWS_MARK).unlink(missing_ok=True)
-        redone = False
-        if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
-            attempts, iterated, redone = [iterated], None, True  # its run was already redone
-        elif resume and (marked := marked_windows(folder)) is not None:  # fewer windows
-            attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
-        if not redone and attempts[0] is not point:  # a --resume must start at this count
-            first = attempts[0].time.steps_per_period
-            if marked_windows(folder) != first:
-                folder.mkdir(parents=True, exist_ok=True)
-                text = f"{first}\nstarted with the windows a lower frequency needed\n"
-                atomic_write(folder / WINDOWS_MARK, text)
-        try:  # one failed frequency (a CFD crash near resonance) must not lose the others
-            continued = resume and (folder / CHECKPOINT_FILE).is_file()
-            notes = []
-            for k, attempt in enumerate(attempts):
-                try:
-                    summary = run_or_afresh(attempt, folder, continued and k == 0)
-                    break
-                except (CouplingDivergenceError, MeshFoldedError) as err:
-                    if isinstance(err, MeshFoldedError) and (
-                        own_motion := folded_on_a_steady_swing(folder, attempt)
-                    ):
-                        first_line = str(err).splitlines()[0]
-                        raise MeshFoldedError(f"{first_line} ({own_motion})") from err
-                    why = f"{waveform.value} {f:g} Hz: {str(err).splitlines()[0]}"
-                    if k + 1 < len(attempts):
-                        n = attempts[k + 1].time.steps_per_period
-                        how = f"{n} windows per period (time.steps_per_period; "
-                        how += "coupling.explicit_fallback_windows)"
-                        start_rerun(folder, why, how, WINDOWS_MARK, f"{n}\n{err}\n")
-                        continue
-                    if iterated is None:
-                        raise
-                    # one solve per window is unstable at this point (explicit added-mass
-                    # instability, or a solver failing on its growing force): iterate its
-                    # windows
-                    how = (
-                        f'iterated windows (coupling.scheme = "{iterated.coupling.scheme}", '
-                        "coupling.explicit_periods = 0, coupling.explicit_until_periodic = false)"
-                    )
-                    start_rerun(folder, why, how, ITERATED_MARK, f"{err}\n")
-                    summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
-                    redone = True
-            if redone:
-                notes.append("iterated windows")
-                learned_iterated = folder
-            elif attempt is not point:
-                notes.append(f"{attempt.time.steps_per_period} windows per period")
-                steady[waveform] = (f, attempt.time.steps_per_period)
-            if "start_from_rest" in summary:
-                notes.insert(0, "started from rest")
-            status = f"ok ({'; '.join(notes)})" if notes else "ok"
-            learned = folder
-        except KeyboardInterrupt as err:  # --overwrite would throw the finished points away
-            if text := str(err).replace(NO_CHECKPOINT, "no checkpoint yet: --resume runs it again"):
-                err.args = (f"{waveform.value} {f:g} Hz: {text}",)
-            raise
-        except (SolverError, RuntimeError) as err:
-            summary, status = {}, f"failed: {err}".splitlines()[0]
-            if on_row is None:
+    running = RunningPoint()
+    try:
+        for index, (waveform, f) in enumerate(jobs):
+            if claims is not None and not claims.take(point_name(waveform, f)):
+                continue  # another rank runs it
+            folder = output / point_name(waveform, f)
+            if not running.take(folder):
                 print(
-                    f"{waveform.value} {f:g} Hz {status} (output kept in {folder})", file=sys.stderr
+                    f"note: {waveform.value} {f:g} Hz: another fsi-sweep is running it in "
+                    f"{folder}; this launch leaves it to that one",
+                    file=sys.stderr,
                 )
-        # a failed run's figures are NaN (its status says why); a figure an ok run did not
-        # give (a fast fluid's per-period thrust, a beam's thrust) is left out, never NaN
-        nan = float("nan") if not summary else None
-        row = {
-            "waveform": waveform.value,
-            "frequency_hz": float(f),
-            "tip_amplitude_m": summary.get("tip_amplitude_m", nan),
-            "mean_thrust_n": summary.get("mean_thrust_n", nan),
-            "thrust_source": summary.get("thrust_source", ""),
-            "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
-            "windows_per_period": summary.get("windows_per_period", nan),
-            "mean_fluid_solves_per_window": summary.get(
-                "mean_fluid_solves_per_window", 1.0 if summary else float("nan")
-            ),
-            # a start-up not yet settled (fsi-run's note): the point's figures are
-            # its last period's, not the periodic state's
-            "tip_amplitude_change_last_period": summary.get(
-                "tip_amplitude_change_last_period", nan
-            ),
-            "status": status,
-        }
-        # the periodic estimate from the run's per-period sequence (fsi_orchestrator.periodic)
-        for key in PERIODIC_KEYS:
-            row[key] = summary.get(key, nan)
-        row["periodic"] = bool(summary.get("periodic", False))
-        row = {k: v for k, v in row.items() if v is not None}
-        # a figure the run gave as NaN fails the point (one it did not give stays NaN: a beam
-        # has no thrust)
-        row["status"] = not_finite_status(
-            {**summary, "status": status}, ("tip_amplitude_m", "mean_thrust_n"), "the run's result"
-        )
-        if on_row is not None:
-            on_row(point_name(waveform, f), row, time.perf_counter() - start)
-        mine.append((index, row))
+                continue
+            point = with_drive(case, f, waveform)
+            if start_from is not None:
+                point = started_from(point, start_from / point_name(waveform, f), ndof)
+            if learned is not None:
+                point = chained(point, learned)
+            start = time.perf_counter()
+            iterated = with_iterated_windows(point)
+            if iterated is not None and learned_iterated is not None:
+                iterated = chained(iterated, learned_iterated)
+            # one solve per window steadies with longer windows: those tried before iterating;
+            # a higher frequency of the same waveform starts at the count a lower one needed
+            attempts = [point, *with_fewer_windows(point)]
+            needed = fewest_needed(steady.get(waveform), finished, waveform, f)
+            if resume and (folder / CHECKPOINT_FILE).is_file():
+                needed = None  # it continues at the count its checkpoint was written with
+            if needed is not None and f > needed[0]:
+                attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
+            if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
+                (folder / ITERATED_MARK).unlink(missing_ok=True)
+                (folder / WINDOWS_MARK).unlink(missing_ok=True)
+            redone = False
+            if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
+                attempts, iterated, redone = [iterated], None, True  # its run was already redone
+            elif resume and (marked := marked_windows(folder)) is not None:  # fewer windows
+                attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
+            if not redone and attempts[0] is not point:  # a --resume must start at this count
+                first = attempts[0].time.steps_per_period
+                if marked_windows(folder) != first:
+                    folder.mkdir(parents=True, exist_ok=True)
+                    text = f"{first}\nstarted with the windows a lower frequency needed\n"
+                    atomic_write(folder / WINDOWS_MARK, text)
+            try:  # one failed frequency (a CFD crash near resonance) must not lose the others
+                continued = resume and (folder / CHECKPOINT_FILE).is_file()
+                notes = []
+                for k, attempt in enumerate(attempts):
+                    try:
+                        summary = run_or_afresh(attempt, folder, continued and k == 0)
+                        break
+                    except (CouplingDivergenceError, MeshFoldedError) as err:
+                        if isinstance(err, MeshFoldedError) and (
+                            own_motion := folded_on_a_steady_swing(folder, attempt)
+                        ):
+                            first_line = str(err).splitlines()[0]
+                            raise MeshFoldedError(f"{first_line} ({own_motion})") from err
+                        why = f"{waveform.value} {f:g} Hz: {str(err).splitlines()[0]}"
+                        if k + 1 < len(attempts):
+                            n = attempts[k + 1].time.steps_per_period
+                            how = f"{n} windows per period (time.steps_per_period; "
+                            how += "coupling.explicit_fallback_windows)"
+                            start_rerun(folder, why, how, WINDOWS_MARK, f"{n}\n{err}\n")
+                            continue
+                        if iterated is None:
+                            raise
+                        # one solve per window is unstable at this point (explicit added-mass
+                        # instability, or a solver failing on its growing force): iterate its
+                        # windows
+                        how = (
+                            f'iterated windows (coupling.scheme = "{iterated.coupling.scheme}", '
+                            "coupling.explicit_periods = 0, "
+                            "coupling.explicit_until_periodic = false)"
+                        )
+                        start_rerun(folder, why, how, ITERATED_MARK, f"{err}\n")
+                        summary = run_dynamic(iterated, folder, resume=False, show_progress=False)
+                        redone = True
+                if redone:
+                    notes.append("iterated windows")
+                    learned_iterated = folder
+                elif attempt is not point:
+                    notes.append(f"{attempt.time.steps_per_period} windows per period")
+                    steady[waveform] = (f, attempt.time.steps_per_period)
+                if "start_from_rest" in summary:
+                    notes.insert(0, "started from rest")
+                status = f"ok ({'; '.join(notes)})" if notes else "ok"
+                learned = folder
+            except KeyboardInterrupt as err:  # --overwrite would throw the finished points away
+                if text := str(err).replace(
+                    NO_CHECKPOINT, "no checkpoint yet: --resume runs it again"
+                ):
+                    err.args = (f"{waveform.value} {f:g} Hz: {text}",)
+                raise
+            except (SolverError, RuntimeError) as err:
+                summary, status = {}, f"failed: {err}".splitlines()[0]
+                if on_row is None:
+                    print(
+                        f"{waveform.value} {f:g} Hz {status} (output kept in {folder})",
+                        file=sys.stderr,
+                    )
+            # a failed run's figures are NaN (its status says why); a figure an ok run did not
+            # give (a fast fluid's per-period thrust, a beam's thrust) is left out, never NaN
+            nan = float("nan") if not summary else None
+            row = {
+                "waveform": waveform.value,
+                "frequency_hz": float(f),
+                "tip_amplitude_m": summary.get("tip_amplitude_m", nan),
+                "mean_thrust_n": summary.get("mean_thrust_n", nan),
+                "thrust_source": summary.get("thrust_source", ""),
+                "slender_body_mean_thrust_n": summary.get("slender_body_mean_thrust_n", nan),
+                "windows_per_period": summary.get("windows_per_period", nan),
+                "mean_fluid_solves_per_window": summary.get(
+                    "mean_fluid_solves_per_window", 1.0 if summary else float("nan")
+                ),
+                # a start-up not yet settled (fsi-run's note): the point's figures are
+                # its last period's, not the periodic state's
+                "tip_amplitude_change_last_period": summary.get(
+                    "tip_amplitude_change_last_period", nan
+                ),
+                "status": status,
+            }
+            # the periodic estimate from the run's per-period sequence (fsi_orchestrator.periodic)
+            for key in PERIODIC_KEYS:
+                row[key] = summary.get(key, nan)
+            row["periodic"] = bool(summary.get("periodic", False))
+            row = {k: v for k, v in row.items() if v is not None}
+            # a figure the run gave as NaN fails the point (one it did not give stays NaN: a beam
+            # has no thrust)
+            row["status"] = not_finite_status(
+                {**summary, "status": status},
+                ("tip_amplitude_m", "mean_thrust_n"),
+                "the run's result",
+            )
+            if on_row is not None:
+                on_row(point_name(waveform, f), row, time.perf_counter() - start)
+            mine.append((index, row))
+    finally:  # also where a stop or a failure leaves the loop
+        running.release()
     if comm is None:
         return [row for _, row in mine]
     gathered = comm.gather(mine, root=0)
@@ -333,6 +351,36 @@ def transient_sweep(
     assert claims is not None
     claims.clear()  # every rank is past its last claim
     return [row for _, row in sorted(item for part in gathered for item in part)]
+
+
+class RunningPoint:
+    """The point this process runs, locked (flock on OUTPUT/<point>/.running) while it runs,
+    so that another launch into the same --output (a job submitted twice, a --resume while
+    the first launch still runs) leaves it alone instead of running it in the same folder.
+    The lock goes with the process; the empty file stays."""
+
+    NAME = ".running"
+
+    def __init__(self) -> None:
+        self._fd: int | None = None
+
+    def take(self, folder: Path) -> bool:
+        """Lock ``folder`` (releasing the point held before); False where another holds it."""
+        self.release()
+        folder.mkdir(parents=True, exist_ok=True)
+        fd = os.open(folder / self.NAME, os.O_CREAT | os.O_WRONLY, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            return False
+        self._fd = fd
+        return True
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
 
 
 class PointClaims:
@@ -641,6 +689,10 @@ def sweep_identity(case: Case, method: str) -> dict:
     fields.pop("directory", None)
     for key in ("frequency_hz", "waveform"):
         fields["actuation"].pop(key, None)
+    if method == "transient" and case.fluid.model is FluidModel.OPENFOAM:
+        # its thrust is the CFD's: the fast thrust's KC0 is in none of its rows (and a sweep
+        # made before the key resumes)
+        fields["fluid"].pop("thrust_shedding_kc", None)
     identity = {"version": __version__, "method": method, "case": fields}
     return json.loads(json.dumps(identity, default=str))
 

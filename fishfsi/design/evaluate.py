@@ -260,10 +260,9 @@ def linear_figures(case: Case) -> dict:
         raise RuntimeError(row["status"].removeprefix("failed: "))
     figures = {"tip_amplitude_m": row["tip_amplitude_m"]}
     if "slender_body_mean_thrust_n" in row:  # not in vacuum
-        thrust = row["slender_body_mean_thrust_n"]
         figures |= {
-            "slender_body_mean_thrust_n": thrust,
-            "mean_thrust_n": thrust,
+            "slender_body_mean_thrust_n": row["slender_body_mean_thrust_n"],
+            "mean_thrust_n": row["mean_thrust_n"],
             "thrust_source": "slender_body",
         }
     return figures

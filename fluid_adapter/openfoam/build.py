@@ -32,11 +32,14 @@ FINGERPRINT = "fishfsi-case.json"
 # [fluid] keys that only set the PIMPLE loop: a reused folder gets its fvSolution rewritten,
 # and a folder generated before they existed (a run resumed across versions) stays reusable
 SOLUTION_KEYS = ("outer_correctors", "non_orthogonal_correctors")
+# [fluid] keys added later that the folder does not depend on at all (the fast thrust's)
+UNUSED_KEYS = ("thrust_shedding_kc",)
 
 
 def fingerprint(case: Case, mesh_scale: float, processes: int) -> str:
     """What the generated folder depends on (geometry and fluid sections, mesh scale)."""
-    fluid = {k: v for k, v in asdict(case.fluid).items() if k not in SOLUTION_KEYS}
+    left_out = SOLUTION_KEYS + UNUSED_KEYS
+    fluid = {k: v for k, v in asdict(case.fluid).items() if k not in left_out}
     data = {
         "geometry": asdict(case.geometry),
         "fluid": fluid,

@@ -244,6 +244,14 @@ class OpenFoamParticipant:
     def load_state(self, state: State) -> None:
         t = float(state["t"])
         u = np.array(state["displacement"], dtype=float)
+        if t > 0:
+            try:
+                self.run.time_folder(t, self.dt)
+            except FileNotFoundError:  # the loop says it in one line: the run starts afresh
+                raise ValueError(
+                    f"{self.run.path} holds no flow at the checkpoint's t = {t:.6g} s: the fluid "
+                    "folder was generated afresh (its settings changed) or lost its time folders"
+                ) from None
         self.driver = self._driver_at(t, u)
         self._displacement = np.array(state["input_displacement"], dtype=float)
         if "drift_next_at" in state:  # (absent in a checkpoint from before the resets)

@@ -668,6 +668,16 @@ class Fluid:
     added_mass_coefficient: float = param(
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )
+    thrust_shedding_kc: float = param(
+        0.65,
+        "KC0 of the fast thrust (mean_thrust_n of a fast fluid's run or linear sweep): each "
+        "harmonic of the motion makes KC / (KC + KC0) of Lighthill's reactive thrust, KC = 2 pi a "
+        "/ h at the trailing edge. Fitted to OpenFOAM's thrust on the held fish's own motion "
+        "(1-25 Hz, 0.43-0.86 of Lighthill's; benchmarks/fast_thrust_shedding.py). 0: Lighthill's "
+        "thrust as it is. slender_body_mean_thrust_n stays Lighthill's; swimming at speed too.",
+        ge=0,
+        le=100,
+    )
     turbulence: Turbulence = param(
         Turbulence.K_OMEGA_SST,
         "openfoam: turbulence model: kOmegaSST (RANS), Smagorinsky or WALE (LES), laminar. "
