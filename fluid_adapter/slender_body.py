@@ -213,11 +213,14 @@ def _shed_harmonics(h: NDArray, tail_height_m: float, kc0: float):
     """(shedding efficiency, samples) of each Fourier component of ``h`` (samples over whole
     periods along axis 0; the last column, or a 1-D history, is the trailing edge): the mean
     (weight 1) and every frequency with motion, on its own trailing-edge KC."""
+    if not tail_height_m > 0:
+        raise ValueError(f"the trailing edge's height must be > 0, got {tail_height_m}")
     n = h.shape[0]
     spectrum = np.fft.rfft(h, axis=0)
     tail = spectrum if h.ndim == 1 else spectrum[:, -1]
+    size = np.abs(spectrum).reshape(len(spectrum), -1).max(axis=1)
     for j in range(len(spectrum)):
-        if j and not np.any(spectrum[j]):
+        if j and size[j] <= 1e-9 * size[1:].max(initial=0.0):  # roundoff: no motion there
             continue
         one = np.zeros_like(spectrum)
         one[j] = spectrum[j]

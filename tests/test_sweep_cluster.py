@@ -523,16 +523,43 @@ def test_a_point_another_launch_is_running_is_left_to_it(tmp_path, monkeypatch, 
     args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
     args += ["--method", "transient", "--output", str(out)]
     try:
-        assert sweep_cli.main(args) == 0
+        assert sweep_cli.main(args) == EXIT_FAILED  # a point has no row yet
     finally:
         os.close(other)
     assert calls == ["sine_2Hz", "sine_6Hz"]
-    assert "note: sine 4 Hz: another fsi-sweep is running it in " in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "note: sine 4 Hz: another fsi-sweep is running it in " in err
+    assert err.strip().endswith(
+        "sweep: 1 point(s) left to another launch running them (sine_4Hz): no row yet; "
+        "--resume once it has ended"
+    )
     assert points(table(out)) == [("sine", 2.0), ("sine", 6.0)]
     calls.clear()
     assert sweep_cli.main([*args, "--resume"]) == 0
     assert calls == ["sine_4Hz"]
     assert points(table(out)) == [("sine", f) for f in (2.0, 4.0, 6.0)]
+
+
+def test_a_file_system_without_locks_runs_the_points_unlocked_with_a_note(
+    tmp_path, monkeypatch, capsys
+):
+    """Lustre without its flock option refuses flock (ENOSYS): the sweep runs, says once that
+    its points are not locked, and exits 0."""
+    import errno
+    import fcntl
+
+    def no_locks(fd, op):
+        raise OSError(errno.ENOSYS, "Function not implemented")
+
+    monkeypatch.setattr(fcntl, "flock", no_locks)
+    monkeypatch.setattr(
+        run_cli, "run_dynamic", lambda case, output, resume, show_progress: {"tip_amplitude_m": 1}
+    )
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4", "--waveforms", "sine", "--quiet"]
+    args += ["--method", "transient", "--output", str(tmp_path / "sweep")]
+    assert sweep_cli.main(args) == 0
+    err = capsys.readouterr().err
+    assert err.count("cannot lock ([Errno 38] Function not implemented); points run unlocked") == 1
 
 
 def test_sigterm_stops_a_linear_sweep_of_a_fish_in_the_tank_in_one_line(tmp_path):

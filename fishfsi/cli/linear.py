@@ -4,7 +4,7 @@ motion the flume prescribes (flume.py).
 
 Per frequency and harmonic (the added mass is computed once): modal superposition with static
 correction, the fluid's edge drag linearized about the response itself; thrust by Lighthill's
-theory on that motion.
+theory on that motion, alone and with the shedding efficiency (fluid.thrust_shedding_kc).
 """
 
 from __future__ import annotations

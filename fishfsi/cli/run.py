@@ -361,12 +361,11 @@ def run_dynamic(
         # per period only where it is the run's thrust (OpenFOAM has its own per period)
         own = "mean_thrust_n" not in summary
         summary.update(thrust_estimate(case, solid, path, per_period=own))
+    fast = summary.pop("fast_mean_thrust_n", None)  # the fast fluid's, with the shedding
     if "mean_thrust_n" in summary:
         summary["thrust_source"] = "openfoam"
     elif "slender_body_mean_thrust_n" in summary:
-        summary["mean_thrust_n"] = summary.pop("fast_mean_thrust_n", None)
-        if summary["mean_thrust_n"] is None:  # under a period: Lighthill's over what there is
-            summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"]
+        summary["mean_thrust_n"] = summary["slender_body_mean_thrust_n"] if fast is None else fast
         summary["thrust_source"] = "slender_body"
     label_results(path, {"thrust_source": summary.get("thrust_source", "none")})
     # the recorded windows' time (every invocation's; window 1's holds the lead-in) and this
@@ -536,8 +535,9 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
 
 def thrust_estimate(case: Case, solid, results_path: Path, per_period: bool = False) -> dict:
     """Slender-body (Lighthill, eq. 5-12, fixed head) mean thrust over the last period; with
-    ``per_period`` also over each complete period (``mean_thrust_per_period_n``, aligned with
-    the tail amplitude's per-period figures)."""
+    ``per_period`` (a fast fluid's run, whose thrust it is) also the fast thrust with the
+    shedding efficiency (``fast_mean_thrust_n``) and it over each complete period
+    (``mean_thrust_per_period_n``, aligned with the tail amplitude's per-period figures)."""
     from fluid_adapter.slender_body import mean_thrust_from_shell
 
     if case.time.step_s is not None:
@@ -565,15 +565,16 @@ def thrust_estimate(case: Case, solid, results_path: Path, per_period: bool = Fa
             shedding_kc=kc0,
         )
 
+    # the run's own thrust (a fast fluid's): with the shedding efficiency, as the linear sweep
+    kc0 = case.fluid.thrust_shedding_kc
     if partial:
         return {
             "slender_body_mean_thrust_n": thrust_until(len(t)),
+            "fast_mean_thrust_n": thrust_until(len(t), kc0),
             "thrust_averaged_over_s": period,
         }
     if not per_period:
         return {"slender_body_mean_thrust_n": thrust_until(len(t))}
-    # the run's own thrust (a fast fluid's): with the shedding efficiency, as the linear sweep
-    kc0 = case.fluid.thrust_shedding_kc
     n = windows_per_period(case)
     ends = range(len(t) - (len(t) // n - 1) * n, len(t) + 1, n)  # complete periods, as the tail's
     thrusts = [thrust_until(end, kc0) for end in ends]

@@ -1,7 +1,8 @@
 """``fsi-sweep CASE``: tail amplitude and slender-body thrust over driving frequencies.
 
 ``--method linear`` (default, seconds): the wet shell's linear periodic response per frequency
-and harmonic (the added mass is computed once), thrust by Lighthill's theory on that motion.
+and harmonic (the added mass is computed once), thrust by Lighthill's theory on that motion
+with the shedding efficiency (Lighthill's alone beside it).
 ``--method transient``: the nonlinear time-domain run per frequency (as ``fsi-run``); with
 OpenFOAM and iqn-ils-am each point starts from the quasi-Newton Jacobian the previous point on
 the same MPI rank learned (``coupling.jacobian_from``: fewer fluid solves, the same result to
@@ -363,6 +364,7 @@ class RunningPoint:
 
     def __init__(self) -> None:
         self._fd: int | None = None
+        self.unlocked = False  # the file system refused a lock: said once
 
     def take(self, folder: Path) -> bool:
         """Lock ``folder`` (releasing the point held before); False where another holds it."""
@@ -374,6 +376,16 @@ class RunningPoint:
         except BlockingIOError:
             os.close(fd)
             return False
+        except OSError as err:  # a file system without locks (Lustre without -o flock)
+            os.close(fd)
+            if not self.unlocked:
+                print(
+                    f"note: {folder}: cannot lock ({err}); points run "
+                    "unlocked: do not start a second launch into this --output while this runs",
+                    file=sys.stderr,
+                )
+            self.unlocked = True
+            return True
         self._fd = fd
         return True
 
@@ -1065,7 +1077,14 @@ def _sweep(args: argparse.Namespace) -> int:
     failed = [r for r in rows if r.get("status", "ok").startswith("failed")]
     if failed:
         say(f"sweep: {len(failed)} of {len(rows)} points failed (rerun them with --resume)", True)
-    return EXIT_FAILED if failed else EXIT_OK
+    left = [n for n in points if n not in finished]  # another launch held them (RunningPoint)
+    if left:
+        say(
+            f"sweep: {len(left)} point(s) left to another launch running them ({', '.join(left)}): "
+            "no row yet; --resume once it has ended",
+            True,
+        )
+    return EXIT_FAILED if failed or left else EXIT_OK
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -27,8 +27,15 @@ OnRecord = Callable[[dict], None]
 
 def study_identity(study: Study, spec: EvaluationSpec) -> dict:
     from fsi_orchestrator import __version__
+    from fsi_orchestrator.case.schema import Fluid
 
-    identity = {"version": __version__, "study": study.identity(), "base": spec.base_raw}
+    identity = {
+        "version": __version__,
+        "study": study.identity(),
+        "base": spec.base_raw,
+        # the fast thrust's default KC0: records of Lighthill's thrust alone do not resume
+        "fast_thrust_shedding_kc": Fluid().thrust_shedding_kc,
+    }
     return json.loads(json.dumps(identity, default=str))
 
 
