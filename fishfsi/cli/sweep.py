@@ -702,9 +702,12 @@ def sweep_identity(case: Case, method: str) -> dict:
     for key in ("frequency_hz", "waveform"):
         fields["actuation"].pop(key, None)
     if method == "transient" and case.fluid.model is FluidModel.OPENFOAM:
-        # its thrust is the CFD's: the fast thrust's KC0 is in none of its rows (and a sweep
-        # made before the key resumes)
-        fields["fluid"].pop("thrust_shedding_kc", None)
+        from fluid_adapter.openfoam.build import UNUSED_KEYS
+
+        # keys the CFD does not read (the fast thrust's KC0) are in none of its rows, and a
+        # sweep made before such a key resumes
+        for key in UNUSED_KEYS:
+            fields["fluid"].pop(key, None)
     identity = {"version": __version__, "method": method, "case": fields}
     return json.loads(json.dumps(identity, default=str))
 
