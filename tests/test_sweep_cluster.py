@@ -39,6 +39,12 @@ def table(folder: Path) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
+def stubbed_transient_sweep(out: Path, frequencies: str) -> list[str]:
+    """fsi-sweep's argv for the beam's transient sine sweep into ``out`` (run_dynamic stubbed)."""
+    args = [str(BEAM), *BEAM_SET, "--frequencies", frequencies, "--waveforms", "sine", "--quiet"]
+    return [*args, "--method", "transient", "--output", str(out)]
+
+
 def points(rows: list[dict]) -> list[tuple[str, float]]:
     return [(r["waveform"], float(r["frequency_hz"])) for r in rows]
 
@@ -456,8 +462,7 @@ def test_sigterm_stops_the_sweep_with_its_rows_kept_and_says_resume(tmp_path, mo
 
     monkeypatch.setattr(run_cli, "run_dynamic", stub)
     out = tmp_path / "sweep"
-    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
-    args += ["--method", "transient", "--output", str(out)]
+    args = stubbed_transient_sweep(out, "2,4,6")
     assert sweep_cli.main(args) == EXIT_INTERRUPTED
     assert calls == ["sine_2Hz", "sine_4Hz"]
     assert points(table(out)) == [("sine", 2.0)]
@@ -485,8 +490,7 @@ def test_a_point_stopped_before_its_first_checkpoint_says_resume_not_overwrite(
 
     monkeypatch.setattr(run_cli, "run_dynamic", stub)
     out = tmp_path / "sweep"
-    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
-    args += ["--method", "transient", "--output", str(out)]
+    args = stubbed_transient_sweep(out, "2,4,6")
     assert sweep_cli.main(args) == EXIT_INTERRUPTED
     assert capsys.readouterr().err.strip() == (
         "interrupted: sine 4 Hz: window 1 did not finish: pimpleFoam stopped; no checkpoint "
@@ -520,8 +524,7 @@ def test_a_point_another_launch_is_running_is_left_to_it(tmp_path, monkeypatch, 
     (out / "sine_4Hz").mkdir(parents=True)
     other = os.open(out / "sine_4Hz" / ".running", os.O_CREAT | os.O_WRONLY)
     fcntl.flock(other, fcntl.LOCK_EX | fcntl.LOCK_NB)  # the other launch, running it
-    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4,6", "--waveforms", "sine", "--quiet"]
-    args += ["--method", "transient", "--output", str(out)]
+    args = stubbed_transient_sweep(out, "2,4,6")
     try:
         assert sweep_cli.main(args) == EXIT_FAILED  # a point has no row yet
     finally:
@@ -555,8 +558,7 @@ def test_a_file_system_without_locks_runs_the_points_unlocked_with_a_note(
     monkeypatch.setattr(
         run_cli, "run_dynamic", lambda case, output, resume, show_progress: {"tip_amplitude_m": 1}
     )
-    args = [str(BEAM), *BEAM_SET, "--frequencies", "2,4", "--waveforms", "sine", "--quiet"]
-    args += ["--method", "transient", "--output", str(tmp_path / "sweep")]
+    args = stubbed_transient_sweep(tmp_path / "sweep", "2,4")
     assert sweep_cli.main(args) == 0
     err = capsys.readouterr().err
     assert err.count("cannot lock ([Errno 38] Function not implemented); points run unlocked") == 1
