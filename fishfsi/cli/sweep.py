@@ -84,6 +84,11 @@ LAUNCHER_TASKS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS")
 
 MAX_POINTS = 1000  # frequencies in one sweep
 
+# Open MPI's mpiexec passes a SIGTERM or Ctrl-C on to its ranks T s later and kills them T s
+# after that (odls_base_sigkill_timeout, 1 s by default). T must outlast one window and its
+# checkpoint: an iterated default-level window takes 9-14 s.
+MPIEXEC_GRACE_S = 30
+
 PERIODIC_KEYS = (
     "tip_amplitude_periodic_m",
     "tip_amplitude_periodic_uncertainty_m",
@@ -621,6 +626,26 @@ def launcher_tasks() -> tuple[str, int] | None:
     return None
 
 
+def mpiexec_stop_note() -> str | None:
+    """The one-line note for a launch by Open MPI's mpiexec whose ranks would be killed before
+    a stop signal lets them finish their window; None under srun (SLURM's KillWait applies)
+    or when the grace is long enough."""
+    if "OMPI_MCA_orte_hnp_uri" not in os.environ:  # set only by Open MPI's own launcher
+        return None
+    try:
+        grace = float(os.environ.get("OMPI_MCA_odls_base_sigkill_timeout", "1"))
+    except ValueError:
+        grace = 1.0
+    if grace >= MPIEXEC_GRACE_S:
+        return None
+    return (
+        f"note: mpiexec gives its ranks {grace:g} s from SIGTERM to SIGKILL, too short to "
+        "finish a window: a Ctrl-C or kill of mpiexec loses the windows since the last "
+        f"checkpoint; export OMPI_MCA_odls_base_sigkill_timeout={MPIEXEC_GRACE_S} before "
+        f"mpiexec (a stop then takes up to {2 * MPIEXEC_GRACE_S} s)"
+    )
+
+
 def mpi_world():
     """MPI.COMM_WORLD when launched by mpiexec/srun with more than one task, else None.
 
@@ -1018,6 +1043,9 @@ def _sweep(args: argparse.Namespace) -> int:
         resumed = f", {len(done)} done before (--resume)" if args.resume else ""
         plural = "s" if len(points) != 1 else ""
         say(f"sweep: {len(points)} point{plural} ({args.method}{mpi}) into {output}{resumed}")
+        note = mpiexec_stop_note() if args.method == "transient" else None
+        if note is not None:
+            say(note)
 
     def on_row(name: str, row: dict, wall_s: float) -> None:
         finished = len(set(table.put(name, row)) & set(points))
