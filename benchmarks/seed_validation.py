@@ -39,7 +39,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fluid_adapter.drag import edge_drag  # noqa: E402
+from fishfsi.cli.linear import carries_edge_inertia  # noqa: E402
+from fluid_adapter.drag import edge_drag, edge_inertia  # noqa: E402
 from fluid_adapter.fast import fast_added_mass  # noqa: E402
 from fluid_adapter.slender_body import mean_thrust_from_shell  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
@@ -119,8 +120,13 @@ class FastModel:
         midline = midline[np.argsort(nodes[midline, 0])]
         tip = int(midline[-1])
         if model.fluid_damping is not None:
+            inertia = (
+                edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
+                if carries_edge_inertia(case)
+                else None
+            )
             response = damped_sweep_response(
-                sweep, drive, x_static, model.fluid_damping, model, tip * NDOF + 2
+                sweep, drive, x_static, model.fluid_damping, model, tip * NDOF + 2, inertia
             )
         else:
             response = sweep_response(sweep, drive, x_static)
@@ -385,7 +391,7 @@ def report(
         "Made by `.venv/bin/python benchmarks/seed_validation.py --write-docs` "
         f"({evaluations} model evaluations, {wall_s / 60:.0f} min on 2 cores). Fast model: "
         "default shell level (columns graded to the outline), potential flow in the tank "
-        "(coarse), edge drag fitted to OpenFOAM, the "
+        "(coarse), edge drag and edge inertia fitted to OpenFOAM, the "
         "linear periodic response (fsi-sweep --method linear).",
         "",
         "**Calibration** (original fish only; fitted, then frozen in the cases):",

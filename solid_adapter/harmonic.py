@@ -226,18 +226,25 @@ class ModalSweep:
             loss_factor=loss_factor,
         )
 
-    def response(self, omega: float, modal_damping: NDArray | None = None) -> NDArray:
+    def response(
+        self,
+        omega: float,
+        modal_damping: NDArray | None = None,
+        modal_mass: NDArray | None = None,
+    ) -> NDArray:
         """``modal_damping``: a damping beyond Rayleigh's in modal coordinates, phi^T C phi
-        (m x m, it couples the modes), e.g. the fluid's edge drag linearized."""
+        (m x m, it couples the modes), e.g. the fluid's edge drag linearized; ``modal_mass``
+        likewise an extra inertia phi^T M phi (the edge inertia)."""
         wj = self.omegas
         stiffness = wj**2 * (1 + 1j * self.loss_factor)
-        if modal_damping is None:
+        if modal_damping is None and modal_mass is None:
             dynamic = 1.0 / (stiffness - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
             return self.static + (self.modal_load * dynamic) @ self.shapes
-        A = (
-            np.diag(stiffness - omega**2 + 2j * self.zetas * wj * omega)
-            + 1j * omega * modal_damping
-        )
+        A = np.diag(stiffness - omega**2 + 2j * self.zetas * wj * omega).astype(complex)
+        if modal_damping is not None:
+            A += 1j * omega * modal_damping
+        if modal_mass is not None:
+            A -= omega**2 * modal_mass
         q = np.linalg.solve(A, self.modal_load) - self.modal_load / wj**2
         return self.static + q @ self.shapes
 
@@ -260,10 +267,11 @@ def sweep_response(
     x_static: NDArray,
     n_harmonics: int = 15,
     modal_damping: NDArray | None = None,
+    modal_mass: NDArray | None = None,
 ) -> PeriodicResponse:
     omega = 2 * np.pi * drive.frequency_hz
     harmonics = [
-        (k, c * sweep.response(k * omega, modal_damping))
+        (k, c * sweep.response(k * omega, modal_damping, modal_mass))
         for k, c in harmonic_amplitudes(drive, n_harmonics)
     ]
     return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
@@ -276,13 +284,29 @@ def damped_sweep_response(
     damping_model,
     model: ShellModel,
     tip_dof: int,
+    inertia_model=None,
 ) -> PeriodicResponse:
-    """sweep_response with an amplitude-dependent damping (the fluid's edge drag) in modal
-    coordinates, linearized about the response itself (linearized_damping_response)."""
+    """sweep_response with an amplitude-dependent damping (the fluid's edge drag), and
+    optionally an amplitude-dependent extra inertia (the edge inertia), in modal coordinates,
+    linearized about the response itself (linearized_damping_response)."""
+    m = len(sweep.omegas)
+    if inertia_model is None:
+        return linearized_damping_response(
+            lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
+            lambda response: sweep.modal_damping(damping_model.linear(model, response)),
+            np.zeros((m, m)),
+            tip_dof,
+        )
+    # both laws in one fixed point: [damping, mass] relaxed together
     return linearized_damping_response(
-        lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
-        lambda response: sweep.modal_damping(damping_model.linear(model, response)),
-        np.zeros((len(sweep.omegas), len(sweep.omegas))),
+        lambda cm: sweep_response(sweep, drive, x_static, modal_damping=cm[0], modal_mass=cm[1]),
+        lambda response: np.stack(
+            [
+                sweep.modal_damping(damping_model.linear(model, response)),
+                sweep.modal_damping(inertia_model.linear(model, response)),
+            ]
+        ),
+        np.zeros((2, m, m)),
         tip_dof,
     )
 

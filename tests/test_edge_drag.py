@@ -116,35 +116,52 @@ def _openfoam_tail_mm() -> dict[tuple[str, float], float]:
     return {key: 1e3 * point["tail_m"] for key, point in reference_points().items()}
 
 
-@pytest.mark.parametrize("exponent, within", [(0.0, None), (None, 0.10)])
-def test_the_fast_curve_against_openfoams_with_and_without_the_frequency_exponent(exponent, within):
-    """The 3 Hz law alone (r = 0) damps the held fish's second mode away (19 Hz: over 35 %
-    short of OpenFOAM's tail); with the default, fitted r the fast tail is within 10 % at 9
-    and 19 Hz, sine and square."""
+def test_the_3hz_law_alone_damps_the_held_fishs_second_mode_away():
+    """The 3 Hz law alone (r = 0) damps the held fish's second mode away: at 19 Hz over 35 %
+    short of OpenFOAM's tail, sine and square."""
     from fishfsi.cli.linear import linear_sweep
     from fsi_orchestrator.case.schema import Waveform
 
     sets = ["fluid.model=potential", "fluid.domain=tank", "fluid.mesh_level=coarse"]
-    sets += ["fluid.edge_drag=true"]
-    if exponent is not None:
-        sets.append(f"fluid.edge_drag_frequency_exponent={exponent}")
+    sets += ["fluid.edge_drag=true", "fluid.edge_drag_frequency_exponent=0"]
     case = load_case(ROOT / "cases" / "fixed_head_3Hz", sets)
     openfoam = _openfoam_tail_mm()
     for waveform in ("sine", "square"):
-        freqs = [9.0, 19.0] if waveform == "sine" else [19.0]
-        for row in linear_sweep(case, freqs, [Waveform(waveform)]):
-            ratio = 1e3 * row["tip_amplitude_m"] / openfoam[(waveform, row["frequency_hz"])]
-            if within is not None:
-                assert ratio == pytest.approx(1.0, abs=within), (waveform, row["frequency_hz"])
-            elif row["frequency_hz"] == 19.0:
-                assert ratio < 0.65, waveform
+        (row,) = linear_sweep(case, [19.0], [Waveform(waveform)])
+        assert 1e3 * row["tip_amplitude_m"] / openfoam[(waveform, 19.0)] < 0.65, waveform
+
+
+def test_the_fast_curves_follow_openfoams_tail_and_thrust():
+    """The default fast model (edge drag with the fitted r, edge inertia, shedding
+    efficiency) against OpenFOAM's 13-point sine and square curves of the main job's scene
+    (coarse): tail within a median 8 % (at most 25 %), thrust within a median 15 %. Without
+    the edge inertia the thrust's median error is 27 % (sine)."""
+    from fast_fluid_accuracy import fast_curve, reference_points
+
+    points = reference_points()
+    sets = ["fluid.mesh_level=coarse"]
+    for inertia, thrust_median in (("true", 0.15), ("false", 0.25)):
+        fast, _ = fast_curve(
+            ROOT / "cases" / "fixed_head_3Hz", [*sets, f"fluid.edge_inertia={inertia}"], points
+        )
+        for waveform in ("sine", "square"):
+            keys = [k for k in points if k[0] == waveform]
+            assert len(keys) == 13
+            tail = [abs(fast[k]["tail_m"] / points[k]["tail_m"] - 1) for k in keys]
+            thrust = [abs(fast[k]["thrust_n"] / points[k]["thrust_n"] - 1) for k in keys]
+            if inertia == "true":
+                assert np.median(tail) < 0.08 and max(tail) < 0.25, waveform
+                assert np.median(thrust) < thrust_median, waveform
+            elif waveform == "sine":
+                assert np.median(thrust) > thrust_median, waveform
 
 
 @pytest.mark.slow
 def test_the_default_frequency_exponent_is_the_one_openfoams_curves_fit():
     """Fitted apart, OpenFOAM's sine and square curves (1-25 Hz, 13 points each) give
-    r = 0.41 and 0.39 (least squares of the log tail ratio); the schema's default is the
-    sine fit to 0.03, and at it the fast tail's median error is under 10 % on both."""
+    r = 0.37 and 0.36 with the edge inertia (0.41 and 0.39 without; least squares of the log
+    tail ratio); the schema's default 0.4 is within 0.05 of both (it keeps the thrust closer:
+    docs/benchmarks.md), and at it the fast tail's median error is under 10 % on both."""
     from fast_fluid_accuracy import fast_curve, fit_exponent, reference_points
 
     from fsi_orchestrator.case.schema import Fluid
@@ -152,9 +169,9 @@ def test_the_default_frequency_exponent_is_the_one_openfoams_curves_fit():
     case = ROOT / "cases" / "fixed_head_3Hz"
     points = reference_points()
     default = Fluid().edge_drag_frequency_exponent
-    assert fit_exponent(case, ["fluid.mesh_level=coarse"], points, "sine") == pytest.approx(
-        default, abs=0.03
-    )
+    for waveform in ("sine", "square"):
+        fitted = fit_exponent(case, ["fluid.mesh_level=coarse"], points, waveform)
+        assert fitted == pytest.approx(default, abs=0.05), waveform
     fast, _ = fast_curve(case, ["fluid.mesh_level=coarse"], points)
     for waveform in ("sine", "square"):
         errors = [

@@ -499,10 +499,17 @@ def test_a_linear_sweep_in_vacuum_pushes_nothing_and_says_when_it_leaves_small_d
     assert len(notes) == 1 and "exceeds a fifth of the plate's 87 mm at 1 point(s)" in notes[0]
 
 
-def test_the_fast_thrusts_kc0_is_not_part_of_an_openfoam_sweeps_identity():
-    """A transient OpenFOAM sweep's rows hold the CFD's thrust: KC0 of the fast thrust is not
-    in its identity, so a sweep made before the key resumes; a linear sweep's rows carry it."""
+def test_the_fast_models_keys_are_not_part_of_an_openfoam_sweeps_identity():
+    """A transient OpenFOAM sweep's rows hold the CFD's answer: KC0 of the fast thrust and
+    the edge inertia are not in its identity, so a sweep made before the keys resumes; a
+    linear sweep's rows carry them."""
     case = load_case(ROOT / "cases" / "fixed_head_3Hz")
     openfoam = sweep_cli.sweep_identity(case, "transient")["case"]["fluid"]
-    assert "thrust_shedding_kc" not in openfoam and openfoam["model"] == "openfoam"
-    assert sweep_cli.sweep_identity(case, "linear")["case"]["fluid"]["thrust_shedding_kc"] == 0.65
+    assert openfoam["model"] == "openfoam"
+    linear = sweep_cli.sweep_identity(case, "linear")["case"]["fluid"]
+    for key, value in (
+        ("thrust_shedding_kc", 0.65),
+        ("edge_inertia", True),
+        ("edge_inertia_gamma", 1.17),
+    ):
+        assert key not in openfoam and linear[key] == value, key

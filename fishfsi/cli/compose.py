@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import FluidDomain, FluidModel
@@ -32,9 +33,10 @@ def without_cfd(case: Case) -> Case:
     return dataclasses.replace(case, fluid=fluid)
 
 
-def shell_with_fast_fluid(case: Case):
+def shell_with_fast_fluid(case: Case, edge_inertia: bool = False):
     """The shell model, with the fast fluid's added mass in its inertia when the case has one.
-    Returns (model, added_mass or None)."""
+    ``edge_inertia``: add the edge inertia (fluid.edge_inertia) at the amplitude of the
+    case's periodic orbit, as a transient carries it. Returns (model, added_mass or None)."""
     from fluid_adapter.fast import fast_added_mass
     from solid_adapter.build import build_shell_model
 
@@ -45,13 +47,31 @@ def shell_with_fast_fluid(case: Case):
         if case.fluid.edge_drag:
             from fluid_adapter.drag import edge_drag
 
+            from .linear import carries_edge_inertia
+
             model.fluid_damping = edge_drag(
                 model,
                 case.fluid.density_kg_m3,
                 case.actuation.frequency_hz,
                 frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
+            if edge_inertia and carries_edge_inertia(case):
+                model.set_added_mass(added.matrix + np.diag(orbit_edge_inertia(case, model)))
     return model, added
+
+
+def orbit_edge_inertia(case: Case, model) -> NDArray:
+    """The edge inertia's nodal masses (kg, on z) at the amplitude of the linear sweep's
+    periodic response to the case's drive: a transient holds them constant, as the linear
+    sweep holds them at its orbit."""
+    from fluid_adapter.drag import NDOF, edge_inertia
+
+    from .linear import linear_model
+
+    waveform = case.actuation.waveform
+    orbit = linear_model(case).response(case.actuation.frequency_hz, waveform)
+    law = edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
+    return law.linear(model, orbit).diagonal()[2::NDOF]
 
 
 def added_mass_for_preconditioning(case: Case, shell_model):

@@ -59,7 +59,7 @@ class LinearModel:
     def response(self, frequency_hz: float, waveform: Waveform) -> PeriodicResponse:
         """The periodic response to the case's drive at ``frequency_hz`` and ``waveform``; the
         edge drag's damping at that frequency."""
-        from fluid_adapter.drag import edge_drag
+        from fluid_adapter.drag import edge_drag, edge_inertia
         from solid_adapter.harmonic import damped_sweep_response, sweep_response
         from solid_adapter.piezo import DriveSignal
 
@@ -72,10 +72,26 @@ class LinearModel:
                 frequency_hz,
                 frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
+            inertia = (
+                edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
+                if carries_edge_inertia(case)
+                else None
+            )
             return damped_sweep_response(
-                self.sweep, drive, self.x_static, drag, model, self.tip * 5 + 2
+                self.sweep, drive, self.x_static, drag, model, self.tip * 5 + 2, inertia
             )
         return sweep_response(self.sweep, drive, self.x_static)
+
+
+def carries_edge_inertia(case: Case) -> bool:
+    """The edge inertia (fluid.edge_inertia) is fitted in still liquid; a swimming body's
+    edge vortices are swept off by its speed, and the swimming model leaves it out, as it
+    leaves out the thrust's shedding efficiency (docs/swimming.md)."""
+    return (
+        case.fluid.edge_drag
+        and case.fluid.edge_inertia
+        and case.analysis.kind is not AnalysisKind.SWIMMING
+    )
 
 
 def linear_model(case: Case) -> LinearModel:

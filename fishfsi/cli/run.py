@@ -300,7 +300,7 @@ def run_dynamic(
             "" if case.fluid.model is FluidModel.NONE else f" and {case.fluid.model.value} fluid"
         )
         with progress.phase(f"set-up: structure{fluid}"):
-            model, added = shell_with_fast_fluid(case)
+            model, added = shell_with_fast_fluid(case, edge_inertia=True)
             recorded = None if resume else recorded_start(case, model.ndof)
             solid, coupling = build_shell_participant(case, model, recorded), None
     schedule = schedule_of(case)

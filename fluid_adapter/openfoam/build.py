@@ -32,8 +32,9 @@ FINGERPRINT = "fishfsi-case.json"
 # [fluid] keys that only set the PIMPLE loop: a reused folder gets its fvSolution rewritten,
 # and a folder generated before they existed (a run resumed across versions) stays reusable
 SOLUTION_KEYS = ("outer_correctors", "non_orthogonal_correctors")
-# [fluid] keys added later that the folder does not depend on at all (the fast thrust's)
-UNUSED_KEYS = ("thrust_shedding_kc",)
+# [fluid] keys added later that the folder does not depend on at all (the fast model's thrust
+# and edge inertia)
+UNUSED_KEYS = ("thrust_shedding_kc", "edge_inertia", "edge_inertia_gamma")
 
 
 def fingerprint(case: Case, mesh_scale: float, processes: int) -> str:

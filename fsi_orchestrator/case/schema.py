@@ -665,6 +665,21 @@ class Fluid:
         ge=0,
         le=2,
     )
+    edge_inertia: bool = param(
+        True,
+        "edge_drag: add the extra inertia of the liquid the edges' vortices carry, m = gamma "
+        "rho |a| per unit area (a the local amplitude of the periodic response), fitted to "
+        "OpenFOAM's lateral force on the same motion (fluid_adapter/drag.py, "
+        "benchmarks/fast_fluid_inertia.py). A linear sweep finds it with its response; a "
+        "transient holds it at its periodic orbit's amplitude.",
+    )
+    edge_inertia_gamma: float = param(
+        1.17,
+        "edge_inertia: gamma, the carried layer's thickness per amplitude; 1.17 fits OpenFOAM's "
+        "inertia at 1, 7.8 and 17.8 mm tail within 0.2 %.",
+        ge=0,
+        le=10,
+    )
     added_mass_coefficient: float = param(
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )
