@@ -72,7 +72,7 @@ from scipy.integrate import trapezoid
 
 # KC0 of the shedding efficiency KC / (KC + KC0): fitted to OpenFOAM's thrust on the held fish's
 # own sine motion, 1-25 Hz, coarse and default levels (benchmarks/fast_thrust_shedding.py)
-SHEDDING_KC = 0.65
+SHEDDING_KC = 0.61
 
 
 def shedding_efficiency(kc: ArrayLike, kc0: float) -> NDArray:

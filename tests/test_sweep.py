@@ -508,7 +508,7 @@ def test_the_fast_models_keys_are_not_part_of_an_openfoam_sweeps_identity():
     assert openfoam["model"] == "openfoam"
     linear = sweep_cli.sweep_identity(case, "linear")["case"]["fluid"]
     for key, value in (
-        ("thrust_shedding_kc", 0.65),
+        ("thrust_shedding_kc", 0.61),
         ("edge_inertia", True),
         ("edge_inertia_gamma", 1.17),
     ):

@@ -99,16 +99,16 @@ def test_a_bad_kc0_names_the_parameter(kc0):
 
 
 def test_kc0_is_the_one_openfoams_sine_curves_fit_on_both_levels():
-    """Both levels' sine curves (22 points, 1-25 Hz) fit KC0 = 0.65 (coarse 0.70, default 0.59
+    """Both levels' sine curves (26 points, 1-25 Hz) fit KC0 = 0.61 (coarse 0.70, default 0.54
     apart); the law is then within a median 5 % of OpenFOAM / Lighthill, where Lighthill's
-    thrust alone is a median 80 % above OpenFOAM's."""
+    thrust alone is a median 72 % above OpenFOAM's."""
     from fast_thrust_shedding import fit
 
     result = fit()
     assert result["kc0"] == pytest.approx(SHEDDING_KC, abs=0.01)
     assert Fluid().thrust_shedding_kc == SHEDDING_KC
     assert result["median_abs_error"] < 0.06
-    assert result["max_abs_error"] < 0.20
+    assert result["max_abs_error"] < 0.25
     assert result["lighthill_median_abs_error"] > 0.7
     for level in result["levels"].values():
         assert level["kc0"] == pytest.approx(SHEDDING_KC, abs=0.1)

@@ -684,7 +684,7 @@ class Fluid:
         1.0, "slender_body: gamma of A33 = rho pi b^2 gamma (eq. 5-3).", gt=0, le=10
     )
     thrust_shedding_kc: float = param(
-        0.65,
+        0.61,
         "KC0 of the fast thrust (mean_thrust_n of a fast fluid's run or linear sweep): each "
         "harmonic of the motion makes KC / (KC + KC0) of Lighthill's reactive thrust, KC = 2 pi a "
         "/ h at the trailing edge. Fitted to OpenFOAM's thrust on the held fish's own motion "
