@@ -39,8 +39,8 @@ from scipy.optimize import brentq, minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fishfsi.cli.linear import carries_edge_inertia  # noqa: E402
-from fluid_adapter.drag import edge_drag, edge_inertia  # noqa: E402
+from fishfsi.cli.linear import case_edge_inertia  # noqa: E402
+from fluid_adapter.drag import edge_drag  # noqa: E402
 from fluid_adapter.fast import fast_added_mass  # noqa: E402
 from fluid_adapter.slender_body import mean_thrust_from_shell  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
@@ -120,11 +120,7 @@ class FastModel:
         midline = midline[np.argsort(nodes[midline, 0])]
         tip = int(midline[-1])
         if model.fluid_damping is not None:
-            inertia = (
-                edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
-                if carries_edge_inertia(case)
-                else None
-            )
+            inertia = case_edge_inertia(case, model)
             response = damped_sweep_response(
                 sweep, drive, x_static, model.fluid_damping, model, tip * NDOF + 2, inertia
             )

@@ -64,13 +64,14 @@ def orbit_edge_inertia(case: Case, model) -> NDArray:
     """The edge inertia's nodal masses (kg, on z) at the amplitude of the linear sweep's
     periodic response to the case's drive: a transient holds them constant, as the linear
     sweep holds them at its orbit."""
-    from fluid_adapter.drag import NDOF, edge_inertia
+    from fluid_adapter.drag import NDOF
 
-    from .linear import linear_model
+    from .linear import case_edge_inertia, linear_model
 
     waveform = case.actuation.waveform
     orbit = linear_model(case).response(case.actuation.frequency_hz, waveform)
-    law = edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
+    law = case_edge_inertia(case, model)
+    assert law is not None  # shell_with_fast_fluid asks only where it applies
     return law.linear(model, orbit).diagonal()[2::NDOF]
 
 

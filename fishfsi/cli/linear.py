@@ -59,7 +59,7 @@ class LinearModel:
     def response(self, frequency_hz: float, waveform: Waveform) -> PeriodicResponse:
         """The periodic response to the case's drive at ``frequency_hz`` and ``waveform``; the
         edge drag's damping at that frequency."""
-        from fluid_adapter.drag import edge_drag, edge_inertia
+        from fluid_adapter.drag import edge_drag
         from solid_adapter.harmonic import damped_sweep_response, sweep_response
         from solid_adapter.piezo import DriveSignal
 
@@ -72,13 +72,14 @@ class LinearModel:
                 frequency_hz,
                 frequency_exponent=case.fluid.edge_drag_frequency_exponent,
             )
-            inertia = (
-                edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
-                if carries_edge_inertia(case)
-                else None
-            )
             return damped_sweep_response(
-                self.sweep, drive, self.x_static, drag, model, self.tip * 5 + 2, inertia
+                self.sweep,
+                drive,
+                self.x_static,
+                drag,
+                model,
+                self.tip * 5 + 2,
+                case_edge_inertia(case, model),
             )
         return sweep_response(self.sweep, drive, self.x_static)
 
@@ -92,6 +93,15 @@ def carries_edge_inertia(case: Case) -> bool:
         and case.fluid.edge_inertia
         and case.analysis.kind is not AnalysisKind.SWIMMING
     )
+
+
+def case_edge_inertia(case: Case, model):
+    """The case's edge-inertia law on ``model``'s nodes, or None where it does not apply."""
+    from fluid_adapter.drag import edge_inertia
+
+    if not carries_edge_inertia(case):
+        return None
+    return edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
 
 
 def linear_model(case: Case) -> LinearModel:
