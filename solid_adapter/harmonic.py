@@ -248,9 +248,9 @@ class ModalSweep:
         q = np.linalg.solve(A, self.modal_load) - self.modal_load / wj**2
         return self.static + q @ self.shapes
 
-    def modal_damping(self, damping: sp.spmatrix) -> NDArray:
-        """phi^T C phi of a damping matrix."""
-        return self.shapes @ (damping @ self.shapes.T)
+    def modal_projection(self, matrix: sp.spmatrix) -> NDArray:
+        """phi^T C phi of a damping (or mass) matrix."""
+        return self.shapes @ (matrix @ self.shapes.T)
 
 
 def harmonic_load(model: ShellModel, drive: DriveSignal, x: NDArray | None = None) -> NDArray:
@@ -290,41 +290,55 @@ def damped_sweep_response(
     optionally an amplitude-dependent extra inertia (the edge inertia), in modal coordinates,
     linearized about the response itself (linearized_damping_response)."""
     m = len(sweep.omegas)
+    damped = linearized_damping_response(
+        lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
+        lambda response: sweep.modal_projection(damping_model.linear(model, response)),
+        np.zeros((m, m)),
+        tip_dof,
+    )
     if inertia_model is None:
-        return linearized_damping_response(
-            lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
-            lambda response: sweep.modal_damping(damping_model.linear(model, response)),
-            np.zeros((m, m)),
-            tip_dof,
+        return damped
+
+    def laws(response: PeriodicResponse) -> NDArray:
+        return np.stack(
+            [
+                sweep.modal_projection(damping_model.linear(model, response)),
+                sweep.modal_projection(inertia_model.linear(model, response)),
+            ]
         )
-    # both laws in one fixed point: [damping, mass] relaxed together
+
+    # both laws together, from the drag's own answer: from no damping the first response
+    # overshoots near a resonance, and the mass then settles slowly
     return linearized_damping_response(
         lambda cm: sweep_response(sweep, drive, x_static, modal_damping=cm[0], modal_mass=cm[1]),
-        lambda response: np.stack(
-            [
-                sweep.modal_damping(damping_model.linear(model, response)),
-                sweep.modal_damping(inertia_model.linear(model, response)),
-            ]
-        ),
-        np.zeros((2, m, m)),
+        laws,
+        laws(damped),
         tip_dof,
+        iterations=200,
+        settled_steps=3,
     )
 
 
 def linearized_damping_response(
-    solve, linearize, damping, tip_dof: int, iterations: int = 60
+    solve, linearize, damping, tip_dof: int, iterations: int = 60, settled_steps: int = 1
 ) -> PeriodicResponse:
-    """The periodic response under an amplitude-dependent damping, linearized about the
-    response's own fundamental: fixed point on ``solve(damping)`` from ``damping``, half
-    relaxed (the amplitude falls as the damping grows), until the tail's fundamental changes
-    by less than 1e-4."""
+    """The periodic response under an amplitude-dependent damping (or damping and mass),
+    linearized about the response's own harmonics: fixed point on ``solve(damping)`` from
+    ``damping``, half relaxed (the amplitude falls as the damping grows), until the tail's
+    fundamental changes by less than 1e-4 in ``settled_steps`` steps in a row (one small step
+    can fall at the turn of a slow oscillation)."""
     response = solve(damping)
+    small = 0
     for _ in range(iterations):
         previous = abs(response.harmonics[0][1][tip_dof])
         damping = 0.5 * damping + 0.5 * linearize(response)
         response = solve(damping)
         if abs(abs(response.harmonics[0][1][tip_dof]) - previous) <= 1e-4 * previous:
-            break
+            small += 1
+            if small >= settled_steps:
+                break
+        else:
+            small = 0
     return response
 
 

@@ -134,13 +134,13 @@ def test_the_3hz_law_alone_damps_the_held_fishs_second_mode_away():
 def test_the_fast_curves_follow_openfoams_tail_and_thrust():
     """The default fast model (edge drag with the fitted r, edge inertia, shedding
     efficiency) against OpenFOAM's 13-point sine and square curves of the main job's scene
-    (coarse): tail within a median 8 % (at most 25 %), thrust within a median 15 %. Without
-    the edge inertia the thrust's median error is 27 % (sine)."""
+    (coarse): tail within a median 8 % (at most 25 %), thrust within a median 11 % (9 % sine,
+    6 % square). Without the edge inertia the thrust's median error is 26 % (sine)."""
     from fast_fluid_accuracy import fast_curve, reference_points
 
     points = reference_points()
     sets = ["fluid.mesh_level=coarse"]
-    for inertia, thrust_median in (("true", 0.15), ("false", 0.25)):
+    for inertia, thrust_median in (("true", 0.11), ("false", 0.25)):
         fast, _ = fast_curve(
             ROOT / "cases" / "fixed_head_3Hz", [*sets, f"fluid.edge_inertia={inertia}"], points
         )

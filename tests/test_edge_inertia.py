@@ -72,3 +72,65 @@ def test_an_extra_modal_mass_proportional_to_the_inertia_lowers_every_frequency_
     for w in (3.0, 17.0, 40.0):
         with_mass = sweep.response(w, modal_mass=mu * np.eye(m))
         np.testing.assert_allclose(with_mass, sweep.response(w * np.sqrt(1 + mu)), rtol=1e-10)
+
+
+def test_the_linear_sweeps_fixed_point_settles_on_its_own_mass():
+    """The serial design of Fig. 5.5 at 24 mm peduncle (3 Hz, held), near its first wet mode:
+    the sweep's answer is the fixed point of drag and mass on its own response, as 300 plain
+    half-relaxed steps from rest find it (a stop on one small step fell 1.1 % high)."""
+    from fishfsi.cli.linear import case_edge_inertia, linear_model
+    from fsi_orchestrator.case.schema import Waveform
+    from solid_adapter.harmonic import sweep_response
+    from solid_adapter.piezo import DriveSignal
+
+    sets = ["geometry.preset=serial", "fluid.domain=sphere", "geometry.peduncle_height_m=0.024"]
+    case = load_case(ROOT / "cases" / "seed" / "amplitude_3Hz", sets)
+    linear = linear_model(case)
+    tip = linear.tip * NDOF + 2
+    answer = abs(linear.response(3.0, Waveform.SINE).harmonics[0][1][tip])
+
+    model, sweep = linear.model, linear.sweep
+    drag, inertia = model.fluid_damping, case_edge_inertia(case, model)  # the laws at 3 Hz
+    drive = DriveSignal.from_case(case)
+    m = len(sweep.omegas)
+    cm = np.zeros((2, m, m))
+    for _ in range(300):
+        response = sweep_response(
+            sweep, drive, linear.x_static, modal_damping=cm[0], modal_mass=cm[1]
+        )
+        laws = [sweep.modal_projection(law.linear(model, response)) for law in (drag, inertia)]
+        cm = 0.5 * cm + 0.5 * np.stack(laws)
+    reference = abs(response.harmonics[0][1][tip])
+    assert answer == pytest.approx(reference, rel=2e-3)
+
+
+@pytest.mark.parametrize(
+    ("sets", "carried"),
+    [
+        ([], True),
+        (["fluid.edge_inertia=false"], False),
+        (["fluid.edge_drag=false"], False),
+        (["analysis.kind=swimming", "boundary.head=free"], False),  # swept off at speed
+    ],
+)
+def test_a_fast_transient_holds_the_edge_inertia_of_its_linear_orbit(sets, carried):
+    """The transient's shell carries, beside the potential added mass, the nodal masses the
+    linear sweep finds at the case's drive; not without the edge drag, nor when swimming."""
+    from fishfsi.cli.compose import shell_with_fast_fluid
+    from fishfsi.cli.linear import case_edge_inertia, linear_model
+    from fsi_orchestrator.case.schema import Waveform
+
+    coarse = ["mesh.level=coarse", "fluid.mesh_level=coarse", *sets]
+    case = load_case(ROOT / "cases" / "seed" / "amplitude_3Hz", coarse)
+    model, added = shell_with_fast_fluid(case, edge_inertia=True)
+    z = np.arange(model.n_nodes) * NDOF + 2
+    extra = (model.inertia - model.mass).toarray()[np.ix_(z, z)] - added.matrix
+    roundoff = 1e-12 * np.abs(added.matrix).max()
+    if not carried:
+        assert np.abs(extra).max() < roundoff
+        return
+    orbit = linear_model(case).response(3.0, Waveform.SINE)
+    expected = case_edge_inertia(case, model).linear(model, orbit).diagonal()[z]
+    np.testing.assert_allclose(np.diag(extra), expected, rtol=1e-9, atol=roundoff)
+    assert np.abs(extra - np.diag(np.diag(extra))).max() < roundoff
+    assert 0.01 < expected.sum() < 0.2  # kg: a few tenths of the potential added mass

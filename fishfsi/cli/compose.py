@@ -63,13 +63,19 @@ def shell_with_fast_fluid(case: Case, edge_inertia: bool = False):
 def orbit_edge_inertia(case: Case, model) -> NDArray:
     """The edge inertia's nodal masses (kg, on z) at the amplitude of the linear sweep's
     periodic response to the case's drive: a transient holds them constant, as the linear
-    sweep holds them at its orbit."""
+    sweep holds them at its orbit. Where the linear response has no answer, none (a note)."""
+    import sys
+
     from fluid_adapter.drag import NDOF
 
-    from .linear import case_edge_inertia, linear_model
+    from .linear import SweepError, case_edge_inertia, linear_model
 
     waveform = case.actuation.waveform
-    orbit = linear_model(case).response(case.actuation.frequency_hz, waveform)
+    try:
+        orbit = linear_model(case, model).response(case.actuation.frequency_hz, waveform)
+    except SweepError as err:
+        print(f"note: no edge inertia ({err})", file=sys.stderr)
+        return np.zeros(model.n_nodes)
     law = case_edge_inertia(case, model)
     assert law is not None  # shell_with_fast_fluid asks only where it applies
     return law.linear(model, orbit).diagonal()[2::NDOF]

@@ -104,9 +104,10 @@ def case_edge_inertia(case: Case, model):
     return edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
 
 
-def linear_model(case: Case) -> LinearModel:
+def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
     """The shell with the fast fluid about the mean voltages' equilibrium; a step without a
-    finite answer (a singular or indefinite tangent) raises SweepError naming the step."""
+    finite answer (a singular or indefinite tangent) raises SweepError naming the step.
+    ``model``: the case's shell with its fast fluid, when already built."""
     from solid_adapter.build import (
         mean_voltage_equilibrium,
         mean_voltage_modal_sweep,
@@ -115,7 +116,8 @@ def linear_model(case: Case) -> LinearModel:
     from solid_adapter.piezo import DriveSignal
 
     case = without_cfd(case)
-    model, _ = shell_with_fast_fluid(case)
+    if model is None:
+        model, _ = shell_with_fast_fluid(case)
     drive0 = DriveSignal.from_case(case)
     x_static = mean_voltage_equilibrium(case, model, drive0, static_loads(case, model))
     if not np.all(np.isfinite(x_static)):

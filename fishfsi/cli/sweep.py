@@ -84,8 +84,8 @@ LAUNCHER_TASKS = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS")
 
 MAX_POINTS = 1000  # frequencies in one sweep
 
-# Open MPI's mpiexec passes a SIGTERM or Ctrl-C on to its ranks T s later and kills them T s
-# after that (odls_base_sigkill_timeout, 1 s by default). T must outlast one window and its
+# Open MPI's (<= 4) mpiexec passes a SIGTERM or Ctrl-C on to its ranks T s later and kills
+# them T s after that (odls_base_sigkill_timeout, 1 s by default). T must outlast one window and its
 # checkpoint: an iterated default-level window takes 9-14 s.
 MPIEXEC_GRACE_S = 30
 
@@ -630,7 +630,7 @@ def mpiexec_stop_note() -> str | None:
     """The one-line note for a launch by Open MPI's mpiexec whose ranks would be killed before
     a stop signal lets them finish their window; None under srun (SLURM's KillWait applies)
     or when the grace is long enough."""
-    if "OMPI_MCA_orte_hnp_uri" not in os.environ:  # set only by Open MPI's own launcher
+    if "OMPI_MCA_orte_hnp_uri" not in os.environ:  # set by Open MPI <= 4's own launcher only
         return None
     try:
         grace = float(os.environ.get("OMPI_MCA_odls_base_sigkill_timeout", "1"))

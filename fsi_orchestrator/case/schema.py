@@ -659,8 +659,9 @@ class Fluid:
         0.4,
         "edge_drag: r in C_D = C0 KC^-q (f / 3 Hz)^-r, how the drag coefficient changes with the "
         "drive frequency at a fixed KC. 0.4 is fitted to OpenFOAM's coupled 1-25 Hz tail "
-        "amplitudes of the held fish (sine 0.41, square 0.39, fitted apart; median error 7-8 %, "
-        "against 20-29 % with 0, the 3 Hz law alone; docs/benchmarks.md, "
+        "amplitudes of the held fish (fitted apart: sine 0.37, square 0.36 with the edge inertia, "
+        "0.41 and 0.39 without; median error 7 % at 0.4, against 20-29 % with 0, the 3 Hz law "
+        "alone; docs/benchmarks.md, "
         "fast_fluid_accuracy.py --fit-exponent).",
         ge=0,
         le=2,
