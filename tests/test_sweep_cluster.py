@@ -426,7 +426,10 @@ def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
     ]
     err = capsys.readouterr().err
     assert "sweep: point 2/4 sine 4 Hz" in err and "failed: pimpleFoam diverged" in err
-    assert f"(output kept in {out / 'sine_4Hz'})" in err
+    assert f"(output kept in {out / 'sine_4Hz'}; the whole error in failure.txt there)" in err
+    # the row keeps the first line; the point's folder the whole error (the log it quotes is
+    # overwritten when the point reruns)
+    assert (out / "sine_4Hz" / "failure.txt").read_text() == "pimpleFoam diverged\nmore\n"
 
     (out / "sine_4Hz" / "checkpoint.h5").unlink()  # it failed before its first checkpoint
     calls.clear()
@@ -437,6 +440,7 @@ def test_a_resumed_transient_sweep_reruns_failed_and_continues_killed_points(
     assert points(rows) == [("sine", f) for f in (2.0, 4.0, 6.0, 8.0)]
     assert all(r["status"] == "ok" for r in rows)
     assert [float(r["tip_amplitude_m"]) for r in rows] == pytest.approx([2e-3, 4e-3, 6e-3, 8e-3])
+    assert not (out / "sine_4Hz" / "failure.txt").exists()  # the rerun went through
 
     calls.clear()  # all done: nothing runs
     assert sweep_cli.main([*args, "--resume"]) == 0

@@ -297,6 +297,7 @@ def transient_sweep(
                 if "start_from_rest" in summary:
                     notes.insert(0, "started from rest")
                 status = f"ok ({'; '.join(notes)})" if notes else "ok"
+                (folder / FAILURE_NOTE).unlink(missing_ok=True)  # an earlier attempt's
                 learned = folder
             except KeyboardInterrupt as err:  # --overwrite would throw the finished points away
                 if text := str(err).replace(
@@ -306,9 +307,12 @@ def transient_sweep(
                 raise
             except (SolverError, RuntimeError) as err:
                 summary, status = {}, f"failed: {err}".splitlines()[0]
+                if folder.is_dir():
+                    atomic_write(folder / FAILURE_NOTE, f"{err}\n")
                 if on_row is None:
                     print(
-                        f"{waveform.value} {f:g} Hz {status} (output kept in {folder})",
+                        f"{waveform.value} {f:g} Hz {status} (output kept in {folder}; the "
+                        f"whole error in {FAILURE_NOTE} there)",
                         file=sys.stderr,
                     )
             # a failed run's figures are NaN (its status says why); a figure an ok run did not
@@ -448,6 +452,9 @@ def fewest_needed(
 
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
+# in a failed point's folder: the whole error (a row's status keeps its first line, and a
+# solver's log, whose last lines the error quotes, is overwritten when the point reruns)
+FAILURE_NOTE = "failure.txt"
 WINDOWS_MARK = "fewer_windows.txt"  # in a point's folder: rerun with these windows per period
 
 
@@ -1054,7 +1061,7 @@ def _sweep(args: argparse.Namespace) -> int:
         say(
             line
             + (
-                f" (output kept in {output / name})"
+                f" (output kept in {output / name}; the whole error in {FAILURE_NOTE} there)"
                 if failed and args.method == "transient"
                 else ""
             ),
