@@ -224,6 +224,7 @@ def build_shell_participant(
         feedback=feedback,
         recorder=recorder,
         exact_start=start is not None,
+        f_damp0=None if start is None else start.f_damp,
     )
 
 

@@ -87,6 +87,32 @@ def test_a_run_started_from_another_continues_it(beam, tmp_path, capsys, gain):
     )
 
 
+def test_a_start_continues_a_run_whose_steps_damp_by_the_strain_rate(tmp_path, capsys):
+    """A damping ratio adds beta K to the beam in liquid, which a step takes as the strain rate
+    over the step, not beta K v at its end. The started run takes the source's last damping
+    force: at 8 windows per period it is the two-period run's second period to 1e-9 (with
+    beta K v recomputed at the start it swung 4.2 times as far)."""
+    beam = ROOT / "cases/beam_in_liquid"
+    sets = [
+        "actuation.mean_strain_transfer=0",
+        "time.steps_per_period=8",
+        "fluid.damping_ratio=0.05",
+    ]
+    two = _run(capsys, beam, tmp_path / "two", *sets, "time.periods=2")
+    _run(capsys, beam, tmp_path / "one", *sets, "time.periods=1")
+    started = _run(
+        capsys,
+        beam,
+        tmp_path / "started",
+        *sets,
+        "time.periods=1",
+        f"time.start_from={tmp_path / 'one'}",
+    )
+    with h5py.File(two["results"]) as f, h5py.File(started["results"]) as g:
+        tail, tail_two = g["shell/tip_displacement_m"][:, 2], f["shell/tip_displacement_m"][:, 2]
+    np.testing.assert_allclose(tail, tail_two[8:], rtol=0, atol=1e-9 * np.ptp(tail))
+
+
 @pytest.mark.parametrize(
     ("first", "then", "message"),
     [

@@ -1039,6 +1039,57 @@ def test_slurm_array_script_runs_one_point_per_task_into_one_table(slurm, tmp_pa
     )
 
 
+@pytest.mark.slow
+@pytest.mark.slurm
+def test_a_two_level_array_starts_each_point_on_its_first_level_orbit(slurm, tmp_path, capsys):
+    """The two-level curve on a cluster: a second job array with --dependency=aftercorr on the
+    first and --start-from its folder starts each task when its own first-level point has
+    finished, on that point's orbit. On the same model the started point continues the
+    first-level run: its period is the second period of a two-period run, to 1e-6."""
+    one_period = [
+        str(BEAM),
+        *BEAM_SET,
+        "--set",
+        "time.periods=1",
+        "--set",
+        "time.steps_per_period=8",
+    ]
+    env = {**slurm, "FREQUENCIES": "2,8", "WAVEFORMS": "sine"}
+    first, second = tmp_path / "first", tmp_path / "second"
+    submitted = subprocess.run(
+        ["sbatch", "--parsable", "--array=0-1", "--time=20", f"--output={tmp_path}/a_%a.log"]
+        + ["--export=ALL", "scripts/slurm_array.sh", *one_period, "--output", str(first)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert submitted.returncode == 0, submitted.stderr
+    job = submitted.stdout.strip().split(";")[0]
+    then = subprocess.run(
+        ["sbatch", "--wait", "--array=0-1", f"--dependency=aftercorr:{job}", "--time=20"]
+        + [f"--output={tmp_path}/b_%a.log", "--export=ALL", "scripts/slurm_array.sh"]
+        + [*one_period, "--start-from", str(first), "--output", str(second)],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    logs = "".join((tmp_path / f"b_{k}.log").read_text() for k in range(2))
+    assert then.returncode == 0, then.stderr + logs
+    assert "starts as usual" not in logs  # each found its first-level point finished
+    assert all(r["status"] == "ok" for r in table(first) + table(second))
+    args = [*one_period[:-4], "--set", "time.periods=2", "--set", "time.steps_per_period=8"]
+    args += ["--set", "actuation.frequency_hz=2", "--json", "--quiet"]
+    assert run_cli.main([*args, "--output", str(tmp_path / "two")]) == 0
+    two_periods = json.loads(capsys.readouterr().out)["tip_amplitude_per_period_m"]
+    started = {float(r["frequency_hz"]): float(r["tip_amplitude_m"]) for r in table(second)}
+    assert started[2.0] == pytest.approx(two_periods[1], rel=1e-6)
+    assert started[2.0] != pytest.approx(two_periods[0], rel=1e-3)  # not a start from scratch
+
+
 def test_point_selects_one_point_and_frequencies_keep_the_key_range():
     from fishfsi.cli.sweep import parse_frequencies, select_point
     from fsi_orchestrator.case import CaseError
