@@ -6,7 +6,7 @@ of issue 27, and each point against the default level's curve from rest
 
     .venv/bin/python benchmarks/two_level_curve.py                  # both sweeps, ~1.5 h on 2 cores
     .venv/bin/python benchmarks/two_level_curve.py --ranks 1 --frequencies 3,19
-    .venv/bin/python benchmarks/two_level_curve.py --tables COARSE DEFAULT   # existing sweeps
+    .venv/bin/python benchmarks/two_level_curve.py --table DEFAULT   # an existing sweep
 
 Both sweeps run as a user runs them (mpiexec -n RANKS fsi-sweep ... --method transient), with
 the settings of docs/validation.md's default curve: explicit-am, the delayed feedback
@@ -25,6 +25,9 @@ import sys
 import time
 import tomllib
 from pathlib import Path
+
+from fishfsi.cli.common import EXIT_FAILED
+from fishfsi.cli.sweep import MPIEXEC_GRACE_S
 
 ROOT = Path(__file__).resolve().parent.parent
 CASE = ROOT / "cases" / "fixed_head_3Hz"
@@ -51,10 +54,11 @@ def sweep(ranks: int, frequencies: str, output: Path, extra: list[str]) -> float
         if os.geteuid() == 0:
             launcher.append("--allow-run-as-root")
         command = launcher + command
-    env = {**os.environ, "OMPI_MCA_odls_base_sigkill_timeout": "40"}
+    # a stop (Ctrl-C) lets the ranks end their window with a checkpoint
+    env = {**os.environ, "OMPI_MCA_odls_base_sigkill_timeout": str(MPIEXEC_GRACE_S)}
     start = time.perf_counter()
     done = subprocess.run(command, env=env)
-    if done.returncode != 0:
+    if done.returncode not in (0, EXIT_FAILED):  # a failed point keeps its row: compare the rest
         raise SystemExit(f"error: {' '.join(command)} exited {done.returncode}")
     return time.perf_counter() - start
 
@@ -75,8 +79,8 @@ def compare(default: Path) -> list[dict]:
     }
     out = []
     for f, r in sorted(rows(default).items()):
-        tail = float(r["tip_amplitude_periodic_m"] or r["tip_amplitude_m"])
-        thrust = float(r["mean_thrust_periodic_n"] or r["mean_thrust_n"])
+        tail = float(r.get("tip_amplitude_periodic_m") or r["tip_amplitude_m"])
+        thrust = float(r.get("mean_thrust_periodic_n") or r["mean_thrust_n"])
         ref = by_f.get(f)
         out.append(
             {
@@ -96,15 +100,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ranks", type=int, default=2, help="MPI ranks of both sweeps")
     parser.add_argument("--frequencies", default="1:25:2")
-    parser.add_argument("--output", default=None, help="keep both sweeps here (default: temporary)")
-    parser.add_argument(
-        "--tables", nargs=2, metavar=("COARSE", "DEFAULT"), help="existing sweeps: compare only"
-    )
+    parser.add_argument("--output", help="both sweeps' folder (default: benchmarks/out/...)")
+    parser.add_argument("--table", metavar="DEFAULT", help="an existing default sweep: compare")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     walls = None
-    if args.tables:
-        default = Path(args.tables[1])
+    if args.table:
+        default = Path(args.table)
     else:
         if shutil.which("mpiexec") is None and args.ranks > 1:
             raise SystemExit("error: --ranks > 1 needs mpiexec (scripts/setup.sh installs it)")

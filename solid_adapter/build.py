@@ -223,8 +223,7 @@ def build_shell_participant(
         orbit=orbit,
         feedback=feedback,
         recorder=recorder,
-        exact_start=start is not None,
-        f_damp0=None if start is None else start.f_damp,
+        exact_start=None if start is None else start.previous,
     )
 
 

@@ -57,15 +57,14 @@ class ShellParticipant:
         orbit: PeriodicResponse | None = None,
         feedback: PeriodicFeedback | None = None,
         recorder: OrbitRecorder | None = None,
-        exact_start: bool = False,
-        f_damp0: NDArray | None = None,
+        exact_start: tuple[NDArray, float] | None = None,
     ) -> None:
         """Starts at rest, from (x0, v0, a0), or on a periodic ``orbit`` at t0 (its state there
         unless (x0, v0, a0) is given too: a recorded orbit's exact end state). ``feedback``:
         the integrator's delayed feedback toward the periodic state, fed here. ``recorder``
         keeps the last period's states for the checkpoint (time.start_from);
         ``exact_start``: (x0, v0, a0) is a state the integrator reached (another run's end), taken
-        as it is, with ``f_damp0`` the damping force that run's last step ended with."""
+        as it is; the pair is that run's displacements one step before and the step's length."""
         self.model = model
         self.volts = volts
         self.loads = loads
@@ -84,7 +83,14 @@ class ShellParticipant:
                 raise ValueError("give the whole start state (x0, v0, a0) with an orbit, or none")
             x0, v0, a0 = orbit.at(t0)
         self.state = self.integrator.initial_state(
-            t0, self.external_load, volts, x0, v0, a0, relax=not exact_start, f_damp0=f_damp0
+            t0,
+            self.external_load,
+            volts,
+            x0,
+            v0,
+            a0,
+            relax=exact_start is None,
+            previous=exact_start,
         )
         self._checkpoint: tuple[DynamicState, NDArray, NDArray] | None = None
         # this window's last solution (a private copy): Newton's start when the window is solved

@@ -86,7 +86,7 @@ class RecordedStart:
     v0: NDArray
     a0: NDArray
     source: Path
-    f_damp: NDArray | None = None  # the damping force of the source's last step
+    previous: tuple[NDArray, float]  # the displacements one window before the end, dt
 
 
 class StartFromError(ValueError):
@@ -137,7 +137,5 @@ def recorded_start(path: Path, shell_state, frequency_hz: float, ndof: int) -> R
         interpolant.omega, interpolant.x_static, interpolant.harmonics, velocities
     )
     v0, a0 = (np.asarray(shell_state[k], dtype=float) for k in ("v", "a"))
-    f_damp = shell_state.get("f_damp")
-    if f_damp is not None:
-        f_damp = np.array(f_damp, dtype=float)
-    return RecordedStart(orbit, x_end.copy(), v0.copy(), a0.copy(), path, f_damp)
+    previous = (displacements[-2].copy(), dt)
+    return RecordedStart(orbit, x_end.copy(), v0.copy(), a0.copy(), path, previous)

@@ -589,7 +589,7 @@ class TimeIntegrator:
         v0: NDArray | None = None,
         a0: NDArray | None = None,
         relax: bool = True,
-        f_damp0: NDArray | None = None,
+        previous: tuple[NDArray, float] | None = None,
     ) -> DynamicState:
         """At rest in static equilibrium under the loads and voltages of t0 (the seed starts
         from zero; a voltage offset switched on at t = 0 would only add a start-up transient),
@@ -597,17 +597,15 @@ class TimeIntegrator:
         too (a linear periodic start), the fast DOFs of (x0, v0, a0) are first brought into
         quasi-static balance with the normal displacements (see relax_fast_dofs), unless
         ``relax`` is False: (x0, v0, a0) is a state this integrator reached (time.start_from),
-        and ``f_damp0`` the damping force its last step ended with. A step's Kelvin-Voigt
-        damping is the strain rate over the step, not beta K v at its end, and the first step
-        weighs the start's damping force at alpha_f: recomputed, it kicked a restarted beam
-        (4x its amplitude at 8 windows per period, 0.3 % at 20)."""
+        and ``previous`` = (the displacements one step before it, that step's length) gives
+        the damping force that step ended with (start_damping_force)."""
         m = self.model
         if a0 is not None and not relax:
             assert x0 is not None and v0 is not None
             x, v = x0.copy(), v0.copy()
             f_int = m.internal(x, volts(t0), tangent=False)[0]
             f_ext = loads(t0, x, False)[0]
-            f_damp = self._damping_force(x, v) if f_damp0 is None else f_damp0.copy()
+            f_damp = self.start_damping_force(x, v, volts(t0), previous)
             return DynamicState(t0, x, v, a0.copy(), f_int, f_ext, f_damp)
         if x0 is None:
 
@@ -638,6 +636,13 @@ class TimeIntegrator:
         if self.damping is None:
             return np.zeros_like(v)
         return self.damping.force(self.model, x, v)[0]
+
+    def start_damping_force(
+        self, x: NDArray, v: NDArray, V: NDArray, previous: tuple[NDArray, float] | None
+    ) -> NDArray:
+        """The damping force of a step that ended at (x, v) under the voltages V and started
+        at ``previous`` = (displacements, step length); None: its value at (x, v)."""
+        return self._damping_force(x, v)
 
     max_halvings = 4  # a window whose Newton fails is retried as 2, 4, ... 16 sub-steps
 
@@ -736,6 +741,23 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         """The step's Kelvin-Voigt damping as stresses (see StrainRate) and the rest."""
         beta, other = split_strain_rate(self.damping)
         return (StrainRate(beta / dt, s.x) if beta else None), other
+
+    def start_damping_force(
+        self, x: NDArray, v: NDArray, V: NDArray, previous: tuple[NDArray, float] | None
+    ) -> NDArray:
+        """As a step computes it: the Kelvin-Voigt part is the strain rate over the step, not
+        beta K v at its end. The first step weighs the start's damping force at alpha_f, so the
+        end-point value kicked a started run (the beam in liquid swung 4.2 times as far)."""
+        if previous is None:
+            return self._damping_force(x, v)
+        x_before, dt = previous
+        beta, other = split_strain_rate(self.damping)
+        m = self.model
+        f = np.zeros_like(v) if other is None else other.force(m, x, v)[0]
+        if beta:
+            rate = StrainRate(beta / dt, x_before)
+            f = f + m.internal(x, V, False, rate=rate)[0] - m.internal(x, V, False)[0]
+        return f
 
     def _kinematics(self, s: DynamicState, dt: float, x1: NDArray) -> tuple[NDArray, NDArray]:
         """Newmark's (v1, a1) at x1."""

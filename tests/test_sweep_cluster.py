@@ -1046,14 +1046,8 @@ def test_a_two_level_array_starts_each_point_on_its_first_level_orbit(slurm, tmp
     first and --start-from its folder starts each task when its own first-level point has
     finished, on that point's orbit. On the same model the started point continues the
     first-level run: its period is the second period of a two-period run, to 1e-6."""
-    one_period = [
-        str(BEAM),
-        *BEAM_SET,
-        "--set",
-        "time.periods=1",
-        "--set",
-        "time.steps_per_period=8",
-    ]
+    windows = ["--set", "time.steps_per_period=8"]
+    one_period = [str(BEAM), *BEAM_SET, *windows, "--set", "time.periods=1"]
     env = {**slurm, "FREQUENCIES": "2,8", "WAVEFORMS": "sine"}
     first, second = tmp_path / "first", tmp_path / "second"
     submitted = subprocess.run(
@@ -1069,6 +1063,7 @@ def test_a_two_level_array_starts_each_point_on_its_first_level_orbit(slurm, tmp
     job = submitted.stdout.strip().split(";")[0]
     then = subprocess.run(
         ["sbatch", "--wait", "--array=0-1", f"--dependency=aftercorr:{job}", "--time=20"]
+        + ["--kill-on-invalid-dep=yes"]
         + [f"--output={tmp_path}/b_%a.log", "--export=ALL", "scripts/slurm_array.sh"]
         + [*one_period, "--start-from", str(first), "--output", str(second)],
         cwd=ROOT,
@@ -1081,7 +1076,7 @@ def test_a_two_level_array_starts_each_point_on_its_first_level_orbit(slurm, tmp
     assert then.returncode == 0, then.stderr + logs
     assert "starts as usual" not in logs  # each found its first-level point finished
     assert all(r["status"] == "ok" for r in table(first) + table(second))
-    args = [*one_period[:-4], "--set", "time.periods=2", "--set", "time.steps_per_period=8"]
+    args = [str(BEAM), *BEAM_SET, *windows, "--set", "time.periods=2"]
     args += ["--set", "actuation.frequency_hz=2", "--json", "--quiet"]
     assert run_cli.main([*args, "--output", str(tmp_path / "two")]) == 0
     two_periods = json.loads(capsys.readouterr().out)["tip_amplitude_per_period_m"]
