@@ -708,7 +708,7 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         m, t1 = self.model, s.t + dt
         V1 = volts(t1)
         added = self._added_mass_term(s, dt, stencil)
-        rate, other = self._strain_rate(s, dt)
+        rate, other = self._strain_rate(s.x, dt)
         residual = self._residual(s, dt, loads, V1, added, rate, other)
         # start: the caller's guess, else x (a constant-acceleration start x + dt v + dt^2/2 a
         # took 6-7 Newton iterations instead of 4-5 on the coupled fish: the fast DOFs' a is
@@ -731,16 +731,34 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         v1, a1 = self._kinematics(s, dt, x1)
         f_int = m.internal(x1, V1, tangent=False)[0]
         f_ext, _ = loads(t1, x1, False)
-        f_damp = np.zeros_like(x1) if other is None else other.force(m, x1, v1)[0]
-        if rate is not None:
-            f_damp += m.internal(x1, V1, False, rate=rate)[0] - f_int
+        f_damp = self._end_damping(x1, v1, V1, f_int, rate, other)
         state = DynamicState(t1, x1, v1, a1, f_int, f_ext, f_damp)
         return replace(state, past=s.past) if added is None else added.carried(state, s)
 
-    def _strain_rate(self, s: DynamicState, dt: float) -> tuple[StrainRate | None, Damping | None]:
-        """The step's Kelvin-Voigt damping as stresses (see StrainRate) and the rest."""
+    def _strain_rate(
+        self, x_before: NDArray, dt: float
+    ) -> tuple[StrainRate | None, Damping | None]:
+        """The Kelvin-Voigt damping of a step from x_before as stresses (see StrainRate), and
+        the rest."""
         beta, other = split_strain_rate(self.damping)
-        return (StrainRate(beta / dt, s.x) if beta else None), other
+        return (StrainRate(beta / dt, x_before) if beta else None), other
+
+    def _end_damping(
+        self,
+        x: NDArray,
+        v: NDArray,
+        V: NDArray,
+        f_int: NDArray,
+        rate: StrainRate | None,
+        other: Damping | None,
+    ) -> NDArray:
+        """A step's damping force at its end (x, v): the rest's, and the internal force with
+        the strain rate's stresses less ``f_int``, the one without them."""
+        m = self.model
+        f = np.zeros_like(x) if other is None else other.force(m, x, v)[0]
+        if rate is not None:
+            f = f + m.internal(x, V, False, rate=rate)[0] - f_int
+        return f
 
     def start_damping_force(
         self, x: NDArray, v: NDArray, V: NDArray, previous: tuple[NDArray, float] | None
@@ -750,14 +768,10 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         end-point value kicked a started run (the beam in liquid swung 4.2 times as far)."""
         if previous is None:
             return self._damping_force(x, v)
-        x_before, dt = previous
-        beta, other = split_strain_rate(self.damping)
-        m = self.model
-        f = np.zeros_like(v) if other is None else other.force(m, x, v)[0]
-        if beta:
-            rate = StrainRate(beta / dt, x_before)
-            f = f + m.internal(x, V, False, rate=rate)[0] - m.internal(x, V, False)[0]
-        return f
+        rate, other = self._strain_rate(*previous)
+        # (the internal force only where the strain rate needs it)
+        f_int = self.model.internal(x, V, False)[0] if rate is not None else np.zeros_like(x)
+        return self._end_damping(x, v, V, f_int, rate, other)
 
     def _kinematics(self, s: DynamicState, dt: float, x1: NDArray) -> tuple[NDArray, NDArray]:
         """Newmark's (v1, a1) at x1."""

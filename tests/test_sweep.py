@@ -285,6 +285,70 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     ]
 
 
+def test_a_point_started_on_an_earlier_sweeps_orbit_starts_at_the_windows_it_ran_with(
+    tmp_path, capsys, monkeypatch
+):
+    """--start-from: a point whose source needed fewer windows (the coarse level's stable
+    count for that drive) starts at that count, where trying its own would diverge first (the
+    default level's 19-21 Hz from the coarse sweep); a point whose source ran at its own count
+    keeps it. Where the windows diverge from the orbit at that count (the default level's
+    23 Hz), the point runs from its usual start there before its windows are iterated.
+    --resume continues each at the count and start it was on."""
+    from fsi_orchestrator.convergence import CouplingDivergenceError
+
+    real = run_cli.run_dynamic
+    runs = []
+    stable_below = {"8": 6}  # windows per period that run, by frequency
+    unstable_from_the_orbit = set()  # frequencies whose windows diverge from the orbit
+
+    def unstable(case, output, **kwargs):
+        n, started, f = (
+            case.time.steps_per_period,
+            bool(case.time.start_from),
+            f"{case.actuation.frequency_hz:g}",
+        )
+        runs.append((case.actuation.frequency_hz, n, started, kwargs["resume"]))
+        out = real(case, output, **kwargs)
+        if n > stable_below.get(f, 100) or (started and f in unstable_from_the_orbit):
+            raise CouplingDivergenceError("force grew", field="force", window=3, iteration=1)
+        return out
+
+    monkeypatch.setattr(run_cli, "run_dynamic", unstable)
+    args = [str(CASE), "--frequencies", "2,8", "--waveforms", "sine", "--method", "transient"]
+    args += ["--set", "time.periods=1", "--set", "time.steps_per_period=10", "--quiet"]
+    args += ["--set", "coupling.partitioned=true", "--set", "coupling.scheme=explicit-am"]
+    args += ["--set", "coupling.explicit_fallback_windows=[8, 6]", "--json"]
+    assert sweep_cli.main([*args, "--output", str(tmp_path / "a")]) == 0
+    capsys.readouterr()
+    assert [r[:2] for r in runs] == [(2.0, 10), (8.0, 10), (8.0, 8), (8.0, 6)]
+    started = [*args, "--start-from", str(tmp_path / "a"), "--output", str(tmp_path / "b")]
+    runs.clear()
+    assert sweep_cli.main(started) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert runs == [(2.0, 10, True, False), (8.0, 6, True, False)]
+    assert [r["status"] for r in rows] == ["ok", "ok (6 windows per period)"]
+    assert [r["windows_per_period"] for r in rows] == [10, 6]
+    # killed in its run: --resume continues the checkpoint at the count it started with
+    (tmp_path / "b" / "sweep_rows" / "sine_8Hz.json").unlink()
+    runs.clear()
+    assert sweep_cli.main([*started, "--resume"]) == 0
+    assert runs == [(8.0, 6, True, True)]
+    capsys.readouterr()
+    # diverging from the orbit: the usual start at that count
+    unstable_from_the_orbit.add("8")
+    runs.clear()
+    assert sweep_cli.main([*started, "--overwrite"]) == 0
+    captured = capsys.readouterr()
+    assert runs == [(2.0, 10, True, False), (8.0, 6, True, False), (8.0, 6, False, False)]
+    assert "running the point again with its usual start" in captured.err
+    status = json.loads(captured.out)["rows"][1]["status"]
+    assert status == "ok (6 windows per period; its start on the earlier orbit diverged)"
+    (tmp_path / "b" / "sweep_rows" / "sine_8Hz.json").unlink()
+    runs.clear()
+    assert sweep_cli.main([*started, "--resume"]) == 0
+    assert runs == [(8.0, 6, False, True)]
+
+
 def test_a_mesh_folded_by_a_steady_swing_is_not_rerun(tmp_path, capsys, monkeypatch):
     """A fold after whole periods of a swing that stopped growing is the motion's own (the
     default level's 1 Hz point): fewer or iterated windows would move the plate the same way,

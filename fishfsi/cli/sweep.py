@@ -225,8 +225,10 @@ def transient_sweep(
                 )
                 continue
             point = with_drive(case, f, waveform)
+            source_windows = None  # the windows per period its start's source ran with
             if start_from is not None:
-                point = started_from(point, start_from / point_name(waveform, f), ndof)
+                source = start_from / point_name(waveform, f)
+                point, source_windows = started_from(point, source, ndof)
             if learned is not None:
                 point = chained(point, learned)
             start = time.perf_counter()
@@ -235,15 +237,21 @@ def transient_sweep(
                 iterated = chained(iterated, learned_iterated)
             # one solve per window steadies with longer windows: those tried before iterating;
             # a higher frequency of the same waveform starts at the count a lower one needed
+            # and a point started on an earlier sweep's orbit at the count that point ran with
+            # (the same drive's stable count on a coarser mesh: 40 windows diverged at the
+            # default level's 19-23 Hz where the coarse point had needed 20)
             attempts = [point, *with_fewer_windows(point)]
             needed = fewest_needed(steady.get(waveform), finished, waveform, f)
-            if resume and (folder / CHECKPOINT_FILE).is_file():
-                needed = None  # it continues at the count its checkpoint was written with
-            if needed is not None and f > needed[0]:
-                attempts = [a for a in attempts if a.time.steps_per_period <= needed[1]] or attempts
+            counts = [needed[1]] if needed is not None and f > needed[0] else []
+            counts += [source_windows] if source_windows is not None else []
+            if counts and not (resume and (folder / CHECKPOINT_FILE).is_file()):
+                # (a checkpoint continues at the count it was written with)
+                fewest = min(counts)
+                attempts = [a for a in attempts if a.time.steps_per_period <= fewest] or attempts
             if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
                 (folder / ITERATED_MARK).unlink(missing_ok=True)
                 (folder / WINDOWS_MARK).unlink(missing_ok=True)
+                (folder / USUAL_START_MARK).unlink(missing_ok=True)
             redone = False
             if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
                 attempts, iterated, redone = [iterated], None, True  # its run was already redone
@@ -253,8 +261,17 @@ def transient_sweep(
                 first = attempts[0].time.steps_per_period
                 if marked_windows(folder) != first:
                     folder.mkdir(parents=True, exist_ok=True)
-                    text = f"{first}\nstarted with the windows a lower frequency needed\n"
+                    text = f"{first}\nstarted with the windows a lower frequency or the start's "
+                    text += "source needed\n"
                     atomic_write(folder / WINDOWS_MARK, text)
+            if not redone and point.time.start_from and start_from is not None:
+                # a point whose windows diverge from the earlier sweep's orbit at its last count
+                # runs from the usual start at that count before its windows are iterated (the
+                # default level's 23 Hz from the coarse orbit: diverged in window 17 at 20;
+                # from rest it runs at 20)
+                attempts.append(with_usual_start(attempts[-1]))
+                if resume and (folder / USUAL_START_MARK).is_file():
+                    attempts = attempts[-1:]
             try:  # one failed frequency (a CFD crash near resonance) must not lose the others
                 continued = resume and (folder / CHECKPOINT_FILE).is_file()
                 notes = []
@@ -271,6 +288,11 @@ def transient_sweep(
                         why = f"{waveform.value} {f:g} Hz: {str(err).splitlines()[0]}"
                         if k + 1 < len(attempts):
                             n = attempts[k + 1].time.steps_per_period
+                            if attempt.time.start_from and not attempts[k + 1].time.start_from:
+                                how = f"its usual start, not the earlier sweep's orbit ({n} "
+                                how += "windows per period)"
+                                start_rerun(folder, why, how, USUAL_START_MARK, f"{err}\n")
+                                continue
                             how = f"{n} windows per period (time.steps_per_period; "
                             how += "coupling.explicit_fallback_windows)"
                             start_rerun(folder, why, how, WINDOWS_MARK, f"{n}\n{err}\n")
@@ -291,9 +313,12 @@ def transient_sweep(
                 if redone:
                     notes.append("iterated windows")
                     learned_iterated = folder
-                elif attempt is not point:
-                    notes.append(f"{attempt.time.steps_per_period} windows per period")
-                    steady[waveform] = (f, attempt.time.steps_per_period)
+                else:
+                    if attempt.time.steps_per_period != point.time.steps_per_period:
+                        notes.append(f"{attempt.time.steps_per_period} windows per period")
+                        steady[waveform] = (f, attempt.time.steps_per_period)
+                    if point.time.start_from and not attempt.time.start_from:
+                        notes.append("its start on the earlier orbit diverged")
                 if "start_from_rest" in summary:
                     notes.insert(0, "started from rest")
                 status = f"ok ({'; '.join(notes)})" if notes else "ok"
@@ -456,6 +481,8 @@ ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redon
 # solver's log, whose last lines the error quotes, is overwritten when the point reruns)
 FAILURE_NOTE = "failure.txt"
 WINDOWS_MARK = "fewer_windows.txt"  # in a point's folder: rerun with these windows per period
+# in a point's folder: its start on an earlier sweep's orbit diverged, rerun from the usual start
+USUAL_START_MARK = "usual_start.txt"
 
 
 def start_rerun(folder: Path, why: str, how: str, mark: str, text: str) -> None:
@@ -498,19 +525,30 @@ def with_fewer_windows(case: Case) -> list[Case]:
     ]
 
 
-def started_from(case: Case, source: Path, ndof: int) -> Case:
+def with_usual_start(case: Case) -> Case:
+    """The point's case without the earlier sweep's orbit to start on (time.start_from)."""
+    return dataclasses.replace(case, time=dataclasses.replace(case.time, start_from=""))
+
+
+def started_from(case: Case, source: Path, ndof: int) -> tuple[Case, int | None]:
     """The point started on the orbit an earlier sweep's point of the same drive ended on
     (time.start_from), where that sweep finished the point (its row ok) with a run that can
-    start this one (a shell of ``ndof`` unknowns, whole periods); else the point as it is,
-    with a note saying why."""
+    start this one (a shell of ``ndof`` unknowns, whole periods), and the windows per period
+    that run had (None if its row lacks them); else the point as it is, with a note saying
+    why, and None."""
     from .compose import recorded_start
 
     row = source.parent / ROWS_FOLDER / f"{source.name}.json"
     why = None
     try:
-        status = json.loads(row.read_text())["row"].get("status", "")
+        fields = json.loads(row.read_text())["row"]
+        status = fields.get("status", "")
     except (OSError, ValueError, KeyError, TypeError, AttributeError):  # none, or not a row
-        status = ""
+        fields, status = {}, ""
+    try:
+        windows = int(fields.get("windows_per_period"))
+    except (TypeError, ValueError, OverflowError):  # absent, or NaN
+        windows = None
     if not status.startswith("ok"):
         why = "holds no finished run"
     else:
@@ -519,11 +557,11 @@ def started_from(case: Case, source: Path, ndof: int) -> Case:
         )
         try:
             recorded_start(candidate, ndof)
-            return candidate
+            return candidate, windows
         except CaseError as err:
             why = f"cannot start it ({str(err).removeprefix('time.start_from: ')})"
     print(f"note: {source} {why}; the point starts as usual", file=sys.stderr)
-    return case
+    return case, None
 
 
 # a swing that grew by less than this from its second-to-last whole period to the rest of the
