@@ -757,7 +757,7 @@ class GeneralizedAlphaIntegrator(TimeIntegrator):
         m = self.model
         f = np.zeros_like(x) if other is None else other.force(m, x, v)[0]
         if rate is not None:
-            f = f + m.internal(x, V, False, rate=rate)[0] - f_int
+            f = f + (m.internal(x, V, False, rate=rate)[0] - f_int)
         return f
 
     def start_damping_force(

@@ -347,6 +347,18 @@ def test_a_point_started_on_an_earlier_sweeps_orbit_starts_at_the_windows_it_ran
     runs.clear()
     assert sweep_cli.main([*started, "--resume"]) == 0
     assert runs == [(8.0, 6, False, True)]
+    # a source that ran its own case's fewer windows (no fallback) sets no count
+    two = [a if a != "2,8" else "2" for a in args]
+    assert (
+        sweep_cli.main([*two, "--set", "time.steps_per_period=8", "--output", str(tmp_path / "c")])
+        == 0
+    )
+    runs.clear()
+    assert (
+        sweep_cli.main([*two, "--start-from", str(tmp_path / "c"), "--output", str(tmp_path / "d")])
+        == 0
+    )
+    assert runs == [(2.0, 10, True, False)]
 
 
 def test_a_mesh_folded_by_a_steady_swing_is_not_rerun(tmp_path, capsys, monkeypatch):

@@ -22,7 +22,9 @@ own point's row or run, not by its siblings' rows.
 A point whose windows of one fluid solve diverge (explicit-am: a sine above 13-15 Hz, a
 square wave's steps) is rerun with longer windows (with_fewer_windows,
 coupling.explicit_fallback_windows) and, where those diverge too, with iterated windows
-(with_iterated_windows); its status says which.
+(with_iterated_windows); its status says which. A point started on an earlier sweep's orbit
+(``--start-from``) starts at the windows that sweep's point fell back to, and where they
+diverge from that orbit it runs from its usual start before its windows are iterated.
 One line per finished point goes to stderr (``--quiet``: none).
 """
 
@@ -236,10 +238,9 @@ def transient_sweep(
             if iterated is not None and learned_iterated is not None:
                 iterated = chained(iterated, learned_iterated)
             # one solve per window steadies with longer windows: those tried before iterating;
-            # a higher frequency of the same waveform starts at the count a lower one needed
-            # and a point started on an earlier sweep's orbit at the count that point ran with
-            # (the same drive's stable count on a coarser mesh: 40 windows diverged at the
-            # default level's 19-23 Hz where the coarse point had needed 20)
+            # a higher frequency of the same waveform starts at the count a lower one needed,
+            # a started point at the count its source fell back to (the same drive on
+            # another mesh: its own count would diverge first)
             attempts = [point, *with_fewer_windows(point)]
             needed = fewest_needed(steady.get(waveform), finished, waveform, f)
             counts = [needed[1]] if needed is not None and f > needed[0] else []
@@ -247,7 +248,8 @@ def transient_sweep(
             if counts and not (resume and (folder / CHECKPOINT_FILE).is_file()):
                 # (a checkpoint continues at the count it was written with)
                 fewest = min(counts)
-                attempts = [a for a in attempts if a.time.steps_per_period <= fewest] or attempts
+                fitting = [a for a in attempts if a.time.steps_per_period <= fewest]
+                attempts = fitting or attempts[-1:]
             if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
                 (folder / ITERATED_MARK).unlink(missing_ok=True)
                 (folder / WINDOWS_MARK).unlink(missing_ok=True)
@@ -261,14 +263,13 @@ def transient_sweep(
                 first = attempts[0].time.steps_per_period
                 if marked_windows(folder) != first:
                     folder.mkdir(parents=True, exist_ok=True)
-                    text = f"{first}\nstarted with the windows a lower frequency or the start's "
-                    text += "source needed\n"
+                    text = f"{first}\nstarted with the windows a lower frequency needed or the "
+                    text += "start's source fell back to\n"
                     atomic_write(folder / WINDOWS_MARK, text)
             if not redone and point.time.start_from and start_from is not None:
-                # a point whose windows diverge from the earlier sweep's orbit at its last count
-                # runs from the usual start at that count before its windows are iterated (the
-                # default level's 23 Hz from the coarse orbit: diverged in window 17 at 20;
-                # from rest it runs at 20)
+                # diverging from the earlier orbit at its last count, the point runs from its
+                # usual start at that count before its windows are iterated (a start from rest
+                # ramps the motion up: it may steady where the orbit's full swing does not)
                 attempts.append(with_usual_start(attempts[-1]))
                 if resume and (folder / USUAL_START_MARK).is_file():
                     attempts = attempts[-1:]
@@ -534,8 +535,8 @@ def started_from(case: Case, source: Path, ndof: int) -> tuple[Case, int | None]
     """The point started on the orbit an earlier sweep's point of the same drive ended on
     (time.start_from), where that sweep finished the point (its row ok) with a run that can
     start this one (a shell of ``ndof`` unknowns, whole periods), and the windows per period
-    that run had (None if its row lacks them); else the point as it is, with a note saying
-    why, and None."""
+    that run fell back to (None where it ran its case's own, or iterated); else the point as
+    it is, with a note saying why, and None."""
     from .compose import recorded_start
 
     row = source.parent / ROWS_FOLDER / f"{source.name}.json"
@@ -545,10 +546,10 @@ def started_from(case: Case, source: Path, ndof: int) -> tuple[Case, int | None]
         status = fields.get("status", "")
     except (OSError, ValueError, KeyError, TypeError, AttributeError):  # none, or not a row
         fields, status = {}, ""
-    try:
-        windows = int(fields.get("windows_per_period"))
-    except (TypeError, ValueError, OverflowError):  # absent, or NaN
-        windows = None
+    windows = None  # the count it fell back to (a row that says so), not its case's own
+    if "windows per period" in status and "iterated" not in status:
+        with contextlib.suppress(TypeError, ValueError, OverflowError):  # absent, or NaN
+            windows = int(fields.get("windows_per_period"))
     if not status.startswith("ok"):
         why = "holds no finished run"
     else:
