@@ -227,7 +227,7 @@ def transient_sweep(
                 )
                 continue
             point = with_drive(case, f, waveform)
-            source_windows = None  # the windows per period its start's source ran with
+            source_windows = None  # the windows per period its start's source fell back to
             if start_from is not None:
                 source = start_from / point_name(waveform, f)
                 point, source_windows = started_from(point, source, ndof)
@@ -237,42 +237,13 @@ def transient_sweep(
             iterated = with_iterated_windows(point)
             if iterated is not None and learned_iterated is not None:
                 iterated = chained(iterated, learned_iterated)
-            # one solve per window steadies with longer windows: those tried before iterating;
-            # a higher frequency of the same waveform starts at the count a lower one needed,
-            # a started point at the count its source fell back to (the same drive on
-            # another mesh: its own count would diverge first)
-            attempts = [point, *with_fewer_windows(point)]
             needed = fewest_needed(steady.get(waveform), finished, waveform, f)
             counts = [needed[1]] if needed is not None and f > needed[0] else []
             counts += [source_windows] if source_windows is not None else []
-            if counts and not (resume and (folder / CHECKPOINT_FILE).is_file()):
-                # (a checkpoint continues at the count it was written with)
-                fewest = min(counts)
-                fitting = [a for a in attempts if a.time.steps_per_period <= fewest]
-                attempts = fitting or attempts[-1:]
-            if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
-                (folder / ITERATED_MARK).unlink(missing_ok=True)
-                (folder / WINDOWS_MARK).unlink(missing_ok=True)
-                (folder / USUAL_START_MARK).unlink(missing_ok=True)
-            redone = False
-            if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
-                attempts, iterated, redone = [iterated], None, True  # its run was already redone
-            elif resume and (marked := marked_windows(folder)) is not None:  # fewer windows
-                attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
-            if not redone and attempts[0] is not point:  # a --resume must start at this count
-                first = attempts[0].time.steps_per_period
-                if marked_windows(folder) != first:
-                    folder.mkdir(parents=True, exist_ok=True)
-                    text = f"{first}\nstarted with the windows a lower frequency needed or the "
-                    text += "start's source fell back to\n"
-                    atomic_write(folder / WINDOWS_MARK, text)
-            if not redone and point.time.start_from and start_from is not None:
-                # diverging from the earlier orbit at its last count, the point runs from its
-                # usual start at that count before its windows are iterated (a start from rest
-                # ramps the motion up: it may steady where the orbit's full swing does not)
-                attempts.append(with_usual_start(attempts[-1]))
-                if resume and (folder / USUAL_START_MARK).is_file():
-                    attempts = attempts[-1:]
+            started = start_from is not None and bool(point.time.start_from)
+            attempts, iterated, redone = point_attempts(
+                point, folder, resume, counts, iterated, started
+            )
             try:  # one failed frequency (a CFD crash near resonance) must not lose the others
                 continued = resume and (folder / CHECKPOINT_FILE).is_file()
                 notes = []
@@ -457,6 +428,55 @@ class PointClaims:
         shutil.rmtree(self.folder, ignore_errors=True)
         with contextlib.suppress(OSError):  # other launches' claims (killed ones) stay
             self.folder.parent.rmdir()
+
+
+def point_attempts(
+    point: Case,
+    folder: Path,
+    resume: bool,
+    counts: list[int],
+    iterated: Case | None,
+    started: bool,
+) -> tuple[list[Case], Case | None, bool]:
+    """The runs a point tries in turn until one does not diverge, its iterated rerun after
+    them (None: none), and whether its run was already redone iterated (--resume).
+    ``counts``: windows per period it starts at no more than (a lower frequency's, its
+    start's source's); ``started``: on an earlier sweep's orbit (--start-from). Writes the
+    marks a --resume reads, and drops an earlier sweep's without --resume."""
+    from fsi_orchestrator.results import CHECKPOINT_FILE
+
+    # one solve per window steadies with longer windows: those tried before iterating; a
+    # higher frequency of the same waveform starts at the count a lower one needed, a started
+    # point at the count its source fell back to (the same drive on another mesh: its own
+    # count would diverge first)
+    attempts = [point, *with_fewer_windows(point)]
+    if counts and not (resume and (folder / CHECKPOINT_FILE).is_file()):
+        # (a checkpoint continues at the count it was written with)
+        fewest = min(counts)
+        fitting = [a for a in attempts if a.time.steps_per_period <= fewest]
+        attempts = fitting or attempts[-1:]
+    if not resume:  # an earlier sweep's marks (--overwrite) say nothing of this run
+        for mark in (ITERATED_MARK, WINDOWS_MARK, USUAL_START_MARK):
+            (folder / mark).unlink(missing_ok=True)
+    if resume and iterated is not None and (folder / ITERATED_MARK).is_file():
+        return [iterated], None, True  # its run was already redone
+    if resume and (marked := marked_windows(folder)) is not None:  # fewer windows
+        attempts = [a for a in attempts if a.time.steps_per_period <= marked] or attempts
+    if attempts[0] is not point:  # a --resume must start at this count
+        first = attempts[0].time.steps_per_period
+        if marked_windows(folder) != first:
+            folder.mkdir(parents=True, exist_ok=True)
+            text = f"{first}\nstarted with the windows a lower frequency needed or the "
+            text += "start's source fell back to\n"
+            atomic_write(folder / WINDOWS_MARK, text)
+    if started:
+        # diverging from the earlier orbit at its last count, the point runs from its usual
+        # start at that count before its windows are iterated (a start from rest ramps the
+        # motion up: it may steady where the orbit's full swing does not)
+        attempts.append(with_usual_start(attempts[-1]))
+        if resume and (folder / USUAL_START_MARK).is_file():
+            attempts = attempts[-1:]
+    return attempts, iterated, False
 
 
 def fewest_needed(
