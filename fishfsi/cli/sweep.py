@@ -491,10 +491,21 @@ def fewest_needed(
     found = [own] if own is not None and own[0] < f else []
     for row in (finished() if finished is not None else {}).values():
         lower = row.get("waveform") == waveform.value and row.get("frequency_hz", f) < f
-        status = row.get("status", "")
-        if lower and status.startswith("ok") and "windows per period" in status:
-            found.append((row["frequency_hz"], int(row["windows_per_period"])))
+        if lower and (n := fell_back_to(row)) is not None:
+            found.append((row["frequency_hz"], n))
     return max(found, default=None)
+
+
+def fell_back_to(row: dict) -> int | None:
+    """The windows per period a finished point's row says it fell back to
+    (coupling.explicit_fallback_windows), None where it ran its case's own or iterated."""
+    status = row.get("status", "")
+    if not (status.startswith("ok") and "windows per period" in status):
+        return None
+    try:
+        return int(row["windows_per_period"])
+    except (KeyError, TypeError, ValueError, OverflowError):  # absent, or NaN
+        return None
 
 
 ITERATED_MARK = "iterated_windows.txt"  # in a point's folder: its run was redone iterated
@@ -566,10 +577,7 @@ def started_from(case: Case, source: Path, ndof: int) -> tuple[Case, int | None]
         status = fields.get("status", "")
     except (OSError, ValueError, KeyError, TypeError, AttributeError):  # none, or not a row
         fields, status = {}, ""
-    windows = None  # the count it fell back to (a row that says so), not its case's own
-    if "windows per period" in status and "iterated" not in status:
-        with contextlib.suppress(TypeError, ValueError, OverflowError):  # absent, or NaN
-            windows = int(fields.get("windows_per_period"))
+    windows = fell_back_to(fields)
     if not status.startswith("ok"):
         why = "holds no finished run"
     else:
