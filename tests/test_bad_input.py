@@ -108,6 +108,21 @@ CASES = {
     "shallow nesting": ("[actuation]\nleft_volts = " + "[" * 300 + "]" * 300 + "\n", "left_volts"),
     "long string shown short": ("[actuation]\nwaveform = '" + "x" * 10000 + "'\n", "waveform"),
     "NUL in a string": ('[coupling]\njacobian_from = "a\\u0000b"\n', "coupling.jacobian_from"),
+    "free plate under a tip force": (
+        RECTANGLE
+        + "poisson_ratio = 0.3\n"
+        + '[analysis]\nkind = "static"\n[boundary]\nhead = "free"\n'
+        "[loads]\ntip_force_n = 1\n",
+        "loads.tip_force_n",
+        "boundary.head",
+    ),
+    "free plate under a pressure": (
+        RECTANGLE
+        + "poisson_ratio = 0.3\n"
+        + '[analysis]\nkind = "static"\n[boundary]\nhead = "free"\n'
+        "[loads]\npressure_pa = 10\n",
+        "loads.pressure_pa",
+    ),
     "empty": ("", "case.toml is empty"),
     "only comments": ("# nothing here\n\n", "case.toml is empty"),
 }

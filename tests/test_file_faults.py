@@ -237,6 +237,21 @@ def test_a_read_only_output_folder_is_refused_before_the_set_up(done, capsys, mo
     assert list(fresh.iterdir()) == []
 
 
+def test_a_read_only_output_folder_is_refused_before_a_swimming_run(tmp_path, capsys, monkeypatch):
+    """A kind whose answer is its summary alone is refused before its work, as a dynamic run."""
+    fresh = tmp_path / "read_only"
+    fresh.mkdir()
+    make_read_only(fresh, monkeypatch)
+    ran = []
+    monkeypatch.setattr(run_cli, "execute", lambda *a, **k: ran.append(1))
+    try:
+        code, lines = run(capsys, ROOT / "cases/swim_original_18Hz", "--output", fresh)
+    finally:
+        fresh.chmod(0o755)
+    assert code == 2 and not ran
+    one_line_naming(lines, fresh, "not writable", "nothing was run")
+
+
 def test_a_read_only_output_folder_is_bad_input_to_fsi_sweep_as_to_fsi_run(
     done, capsys, monkeypatch
 ):

@@ -163,7 +163,22 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
         ),
         (
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,-3,0.01,ok\n",
-            "sweep.csv, line 2: frequency_hz = '-3' is not > 0",
+            "sweep.csv, line 2: frequency_hz = '-3' is outside the drive's 0.01..1000 Hz "
+            "(actuation.frequency_hz)",
+        ),
+        (
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,1e308,0.01,ok\n",
+            "sweep.csv, line 2: frequency_hz = '1e308' is outside the drive's 0.01..1000 Hz "
+            "(actuation.frequency_hz)",
+        ),
+        (
+            "waveform,frequency_hz,tip_amplitude_m,status\ntriangle,3,0.01,ok\n",
+            "sweep.csv, line 2: waveform = 'triangle' is none of sine, square",
+        ),
+        (  # an empty picture would say nothing
+            "waveform,frequency_hz,tip_amplitude_m,status\nsine,3,,failed: crashed\n",
+            "sweep.csv: no point finished (each row's status says why; its folder keeps "
+            "failure.txt); nothing to draw",
         ),
         (
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,nan,,failed: crashed\n",

@@ -131,6 +131,14 @@ def test_fsi_run_prints_the_contract(capsys):
     assert summary["turning_rate_deg_s"] == pytest.approx(0.0, abs=1e-6)  # symmetric drive
 
 
+def test_a_symmetric_drive_does_not_turn_at_a_low_prescribed_speed(capsys):
+    """At 0.05 m/s (a flume's speed) the yaw balance has far roots on which the fish would
+    spin at about 200 deg/s; the symmetric drive's own root is 0."""
+    code, out, err = fsi_run(capsys, "swimming.speed_m_s=0.05")
+    assert code == 0, err
+    assert json.loads(out)["turning_rate_deg_s"] == pytest.approx(0.0, abs=1e-6)
+
+
 def test_the_seeds_right_turn_turns_right(original_runs):
     assert original_runs["right_turn"]["turning_rate_deg_s"] < 0
 
@@ -153,6 +161,7 @@ def test_the_seeds_right_turn_rate_within_a_factor_1_5(original_runs):
         ("swimming.crossflow_drag_coefficient=-0.5", "swimming.crossflow_drag_coefficient"),
         ("boundary.head=clamped", "boundary.head"),
         ("fluid.model=none", "fluid.model"),
+        ("fluid.density_kg_m3=25", "swimming.float_density_kg_m3"),  # no float can rise
     ],
 )
 def test_bad_input_is_one_line_naming_the_key(capsys, override, key):

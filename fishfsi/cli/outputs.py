@@ -30,6 +30,19 @@ from .common import cannot_write
 SWEEP_FILES = ("sweep.csv", "sweep_rows")  # what fsi-sweep keeps in its --output
 
 
+def refuse_unwritable(output: Path, names: tuple[str, ...] | None = None) -> None:
+    """Refuse, before any work, an output folder where ``names`` (a dynamic run's results
+    and checkpoint by default) cannot be written."""
+    try:
+        check_writable(output) if names is None else check_writable(output, names)
+    except OutputError as err:
+        if not err.not_writable:  # a full disk is the machine's state, not the input's
+            raise
+        # a folder given that cannot be written is bad input, as one that cannot be made
+        # (exit 2, as fsi-sweep and fsi-post refuse it)
+        raise CaseError(str(err)) from None
+
+
 def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
     """Before the set-up's seconds: a folder that cannot be written, a --resume without a
     checkpoint, and a folder holding an earlier run (without --resume or --overwrite) each
@@ -54,14 +67,7 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
             f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "
             "--resume, write elsewhere with --output, or replace it with --overwrite"
         )
-    try:
-        check_writable(output)
-    except OutputError as err:
-        if not err.not_writable:  # a full disk is the machine's state, not the input's
-            raise
-        # a folder given that cannot be written is bad input, as one that cannot be made
-        # (exit 2, as fsi-sweep and fsi-post refuse it)
-        raise CaseError(str(err)) from None
+    refuse_unwritable(output)
     if resume:
         check_results_readable(output / RESULTS_FILE, checkpoint)
     return bool(held) and not resume

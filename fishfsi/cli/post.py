@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import csv
+import dataclasses
 import json
 import re
 import sys
@@ -28,6 +29,9 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from fsi_orchestrator.case.params import spec_of  # noqa: E402
+from fsi_orchestrator.case.schema import Actuation, Waveform  # noqa: E402
 
 from . import pictures  # noqa: E402
 from .common import (  # noqa: E402
@@ -87,6 +91,12 @@ def overlay_seed(ax_amp, ax_thrust) -> None:
     ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
 
 
+_FREQUENCY = spec_of(next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz"))
+assert _FREQUENCY.ge is not None and _FREQUENCY.le is not None
+FREQUENCY_RANGE_HZ = (_FREQUENCY.ge, _FREQUENCY.le)  # a row's frequency, as a case's
+WAVEFORMS = tuple(w.value for w in Waveform)
+
+
 class PostError(ValueError):
     """Input fsi-post cannot draw, said in one line."""
 
@@ -129,14 +139,28 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
                     f"{csv_path}, line {line}: {key} = {text!r} is not finite for a point "
                     f"whose status is {row.get('status', 'ok')!r}"
                 )
-            if key == "frequency_hz" and not value > 0:
-                raise PostError(f"{csv_path}, line {line}: frequency_hz = {text!r} is not > 0")
+            lo, hi = FREQUENCY_RANGE_HZ
+            if key == "frequency_hz" and not lo <= value <= hi:
+                raise PostError(
+                    f"{csv_path}, line {line}: frequency_hz = {text!r} is outside the "
+                    f"drive's {lo:g}..{hi:g} Hz (actuation.frequency_hz)"
+                )
+        if row.get("waveform") not in WAVEFORMS:
+            raise PostError(
+                f"{csv_path}, line {line}: waveform = {row.get('waveform')!r} is none of "
+                f"{', '.join(WAVEFORMS)}"
+            )
         for key in needed:
             if not row[key]:
                 raise PostError(
                     f"{csv_path}, line {line}: {key} is empty for a point whose status is "
                     f"{row.get('status', 'ok')!r}"
                 )
+    if not any(row.get("status", "ok").startswith("ok") for row in rows):
+        raise PostError(
+            f"{csv_path}: no point finished (each row's status says why; its folder keeps "
+            "failure.txt); nothing to draw"
+        )
     identity = None
     if (csv_path.parent / "sweep_case.json").is_file():
         try:

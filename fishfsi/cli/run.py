@@ -46,7 +46,7 @@ from .compose import (
 )
 from .linear import swimming_summary
 from .modal import modal_summary
-from .outputs import check_finite, label_results, prepare_output
+from .outputs import check_finite, label_results, prepare_output, refuse_unwritable
 from .progress import RunProgress, StopRequest
 
 
@@ -641,6 +641,7 @@ def _body(args: argparse.Namespace) -> int:
             output.mkdir(parents=True, exist_ok=True)
         except OSError as err:
             raise CaseError(cannot_write(output, err)) from None
+        refuse_unwritable(output, (RUN_SUMMARY_FILE,))
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
     if keep:
@@ -648,9 +649,11 @@ def _body(args: argparse.Namespace) -> int:
         try:
             atomic_write(path, json_text(summary, indent=1))
         except OSError as err:  # the summary is printed; the results are on disk
+            kept = "it is printed above" + (
+                f" and the results are in {summary['results']}" if "results" in summary else ""
+            )
             raise RuntimeError(
-                f"{path}: cannot write the summary ({err.strerror or err}); it is printed "
-                "above and a dynamic run's results are in results.h5"
+                f"{path}: cannot write the summary ({err.strerror or err}); {kept}"
             ) from None
     return EXIT_OK
 

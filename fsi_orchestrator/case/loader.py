@@ -242,6 +242,18 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 f"actuation.{key} must lie within the MFC's range [{lo:g}, {hi:g}] V "
                 f"(Table 3.1), got {list(volts)}"
             )
+    if case.analysis.kind.value == "static" and case.boundary.head.value == "free":
+        outside = [
+            f"loads.{key}"
+            for key in ("tip_force_n", "tip_moment_nm", "pressure_pa")
+            if getattr(case.loads, key) != 0
+        ]
+        if outside:
+            raise CaseError(
+                f'{", ".join(outside)} on a free plate (boundary.head = "free"): nothing '
+                "holds the plate against an outside load, so it has no static equilibrium; "
+                'clamp it (boundary.head = "clamped") or run analysis.kind = "dynamic"'
+            )
     if case.analysis.kind.value == "swimming":
         if g.kind is not GeometryKind.FISH:
             raise CaseError(
@@ -258,7 +270,15 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 'analysis.kind = "swimming" needs a liquid to swim in: fluid.model = '
                 '"potential" or "slender_body" (or "openfoam" for a flume), got "none"'
             )
-        speed = case.swimming.speed_m_s
+        sw = case.swimming
+        if sw.float_volume_m3 is None and case.fluid.density_kg_m3 <= sw.float_density_kg_m3:
+            raise CaseError(
+                f"swimming.float_density_kg_m3 = {sw.float_density_kg_m3:g} is not below "
+                f"fluid.density_kg_m3 = {case.fluid.density_kg_m3:g}: a float that does not "
+                "rise cannot make the robot neutrally buoyant; give a lighter float or its "
+                "volume (swimming.float_volume_m3)"
+            )
+        speed = sw.speed_m_s
         if case.fluid.model.value == "openfoam" and (speed is None or speed <= 0):
             raise CaseError(
                 'swimming.speed_m_s: a swimming case with fluid.model = "openfoam" is a flume '
