@@ -347,7 +347,7 @@ def write_checkpoint(
                 "continue with --resume",
             )
         else:
-            kept, then = "the results are kept (no checkpoint yet)", "run again"
+            kept, then = "the results are kept (no checkpoint yet)", "run again with --overwrite"
         raise write_failure(path, cause, kept, then) from None
 
 

@@ -94,13 +94,7 @@ class PlateLayout:
 def _fish_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
     p = resolve_fish(case)
     core = _core_material(case, default="fsi")
-    x_weight = p.head_weight_x_m if p.head_weight_x_m is not None else p.head_weight_radius_m + 3e-3
-    weight = Disk(xc=x_weight, radius=p.head_weight_radius_m)
-    check(
-        weight.xc - weight.radius >= 0,
-        "geometry.head_weight_x_m",
-        "places the head weight ahead of the nose",
-    )
+    weight = Disk(xc=p.head_weight_centre_x_m, radius=p.head_weight_radius_m)  # fits: resolve_fish
     package = Rect(
         p.actuator_start_x_m, p.actuator_start_x_m + p.actuator_length_m, p.actuator_width_m / 2
     )

@@ -123,6 +123,11 @@ CASES = {
         "[loads]\npressure_pa = 10\n",
         "loads.pressure_pa",
     ),
+    "head weight behind the tail": (
+        "[geometry]\nhead_weight_x_m = 0.5\n",
+        "geometry.head_weight_x_m",
+        "does not fit on the plate",
+    ),
     "empty": ("", "case.toml is empty"),
     "only comments": ("# nothing here\n\n", "case.toml is empty"),
 }

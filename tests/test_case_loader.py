@@ -73,8 +73,8 @@ def test_a_key_named_only_in_the_advice_is_not_blamed():
 
 
 def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
-    """The clamp's length defaults to the head weight's diameter: a larger head weight from
-    --set leaves no plate free, and the line names the --set, not the file alone."""
+    """A head weight from --set that does not fit the plate, and a clamp longer than the
+    plate: the line names the --set, not the file alone."""
 
     def modal(*settings: str) -> subprocess.CompletedProcess:
         sets = [a for s in settings for a in ("--set", s)]
@@ -84,9 +84,15 @@ def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
     done = modal("fluid.model=potential", "geometry.head_weight_radius_m=0.09")
     assert done.returncode == 2
     assert done.stderr.strip() == (
-        "error: case.toml with --set 'fluid.model=potential', "
-        "'geometry.head_weight_radius_m=0.09': boundary.clamp_length_m (0.183 m) must be "
-        "shorter than the plate (0.167 m), or nothing is free to move"
+        "error: --set 'geometry.head_weight_radius_m=0.09': geometry.head_weight_x_m and "
+        "geometry.head_weight_radius_m put a head weight of radius 0.09 m at x = 0.093 m, where "
+        "it does not fit on the plate (0.167 m long, 0.055 m high there)"
+    )
+    done = modal("fluid.model=potential", "boundary.clamp_length_m=0.2")
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "error: --set 'boundary.clamp_length_m=0.2': boundary.clamp_length_m (0.2 m) must "
+        "be shorter than the plate (0.167 m), or nothing is free to move"
     )
     done = modal("geometry.max_height_m=0.01")
     assert done.returncode == 2

@@ -148,6 +148,33 @@ def test_resume_refuses_the_output_of_another_study(finished, tmp_path, capsys):
     assert code == 2 and len(err) == 1 and "another study" in err[0]
 
 
+def test_resume_refuses_evaluations_whose_study_is_unknown(finished, tmp_path, capsys):
+    """Without study.json the evaluations may be another study's: not reused."""
+    folder, out, _ = finished
+    shutil.copytree(out, tmp_path / "out")
+    (tmp_path / "out" / "study.json").unlink()
+    code = design_cli.main([str(folder), "--output", str(tmp_path / "out"), "--resume"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "study.json is missing or damaged" in err[0] and "--overwrite" in err[0]
+
+
+def test_resume_evaluates_again_a_design_whose_record_lost_its_figures(finished, tmp_path, capsys):
+    folder, out, first = finished
+    shutil.copytree(out, tmp_path / "out")
+    record = tmp_path / "out" / "evaluations" / "0001" / "summary.json"
+    damaged = json.loads(record.read_text())
+    damaged["objectives"] = {k: float("nan") for k in damaged["objectives"]}
+    record.write_text(json.dumps(damaged))
+    again = run_json(capsys, str(folder), "--output", str(tmp_path / "out"), "--resume")
+    assert (again["resumed"], again["evaluated_now"]) == (first["evaluations"] - 1, 1)
+    assert again["best"]["parameters"] == first["best"]["parameters"]
+    assert again["best"]["objective"] == pytest.approx(first["best"]["objective"], rel=1e-12)
+    rows = rows_of(tmp_path / "out")
+    assert all(np.isfinite(float(r["tip_amplitude_m"])) for r in rows if r["status"] == "ok")
+    assert [r["status"] for r in rows].count("ok") == 2  # 2 and 4 Hz; 6 Hz is infeasible
+
+
 @pytest.mark.parametrize(
     ("change", "named"),
     [

@@ -5,6 +5,7 @@ it (provenance attributes, units)."""
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import errno
 import json
@@ -554,3 +555,67 @@ def test_a_reader_that_leaves_early_ends_the_command_without_a_traceback():
     _, err = modal.communicate(timeout=300)
     assert modal.returncode == 141
     assert err.decode() == ""
+
+
+# ------------------------------------------------------------------ write faults past the checks
+def test_a_write_fault_past_the_up_front_checks_is_one_line_naming_the_file(tmp_path, capsys):
+    """A disk that fills after a command's checks (a sweep's row, a study's table) ends in
+    one line naming the file, what is kept and what to do; the temporary file is removed."""
+    from fishfsi.cli.common import atomic_write, guarded
+
+    target = tmp_path / "sweep.csv"
+
+    def fill_up() -> int:
+        with mock_full_disk():
+            atomic_write(target, "waveform,frequency_hz\n")
+        return 0
+
+    assert guarded(fill_up) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0] == (
+        f"error: {target}: disk full; "
+        "results so far are kept; free space, then continue with --resume"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+@contextlib.contextmanager
+def mock_full_disk():
+    """Every write to a file fails as on a full disk."""
+    real = os.fsync
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    os.fsync = full
+    try:
+        yield
+    finally:
+        os.fsync = real
+
+
+def test_fsi_post_says_its_own_output_is_full_not_that_the_input_is_bad(done, capsys, monkeypatch):
+    case, out = done
+    picture = out / "run.png"
+
+    def full(fig, path):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr(post_cli, "save_figure", full)
+    assert post_cli.main([str(out)]) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    one_line_naming(lines, picture, "disk full", "the inputs are untouched")
+    assert "not a table" not in lines[0] and not picture.exists()
+
+
+def test_fsi_post_draws_a_results_file_only_up_to_its_first_nan(done, capsys):
+    """NaN never leaves with exit 0: the picture shows the windows before it, and it says so."""
+    case, out = done
+    with h5py.File(out / "results.h5", "a") as h5:
+        h5["shell/tip_displacement_m"][6] = np.nan
+    assert post_cli.main([str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    line = one_line_naming(lines, out / "results.h5", "shell/tip_displacement_m", "window 7")
+    assert "run.png shows the 6 windows before it" in line
+    assert (out / "run.png").stat().st_size > 0

@@ -232,6 +232,7 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
     (SLURM's time limit, scancel) stops it as Ctrl-C does: one line, exit 130;
     ``interrupted`` says what is kept."""
     from fsi_orchestrator.loop import ResumeError
+    from fsi_orchestrator.results import is_write_fault
     from solid_adapter.solvers import SolverError  # the composition root may know adapters
 
     try:
@@ -247,6 +248,16 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
         # stdout's buffer cannot be flushed at exit either: point it at /dev/null
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
+    except OSError as err:
+        if not is_write_fault(err):
+            raise
+        # a full disk or a read-only folder met anywhere past the up-front checks
+        from fsi_orchestrator.results import write_failure
+
+        where = Path(err.filename) if err.filename else Path.cwd()
+        kept, _, then = interrupted.partition("; ")
+        print(f"error: {write_failure(where, err, kept, then or 'run it again')}", file=sys.stderr)
+        return EXIT_FAILED
     except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
         from fsi_orchestrator.participant import ParticipantStopped
 
@@ -285,12 +296,39 @@ def output_folder(given: str | None, default: Path) -> Path:
     return Path(given).absolute()
 
 
+@contextlib.contextmanager
+def replaced_atomically(path: Path) -> Iterator[Path]:
+    """A temporary name beside ``path`` to write to; renamed to ``path`` when the block ends,
+    removed when it fails (a full disk leaves no half file and no litter)."""
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException as err:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        if isinstance(err, OSError) and err.errno is not None and err.filename in (None, str(tmp)):
+            raise OSError(err.errno, err.strerror, str(path)) from None  # name what was meant
+        raise
+
+
 def atomic_write(path: Path, text: str) -> None:
     """``text`` into ``path`` through a renamed temporary file: a reader, or a kill, never
     meets half a file."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", newline="") as fh:
+    with replaced_atomically(path) as tmp, open(tmp, "w", newline="") as fh:
         fh.write(text)
         fh.flush()
         os.fsync(fh.fileno())
-    os.replace(tmp, path)
+
+
+def save_figure(fig: Any, path: Path) -> Path:
+    """A matplotlib figure as ``path`` (its format from the suffix), whole or not at all;
+    the figure is closed."""
+    import matplotlib.pyplot as plt
+
+    try:
+        with replaced_atomically(path) as tmp:
+            fig.savefig(tmp, dpi=120, format=path.suffix.lstrip("."))
+    finally:
+        plt.close(fig)
+    return path

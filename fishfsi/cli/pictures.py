@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from .common import replaced_atomically
+
 BODY_SERIES = "flow_body.pvd"
 VORTEX_SERIES = "flow_vortices.pvd"
 WINDOW = [1200, 700]
@@ -118,7 +120,8 @@ def draw(vtk: Path, output: Path, period_s: float | None) -> list[Path]:
     plotter = pv.Plotter(off_screen=True, window_size=WINDOW)
     render(plotter, *meshes[-1])
     still = output / "fish3d.png"
-    plotter.screenshot(str(still))
+    with replaced_atomically(still) as tmp:
+        plotter.screenshot(str(tmp))
     written.append(still)
     images = []
     for frame, body, vortices in meshes:
@@ -137,4 +140,7 @@ def _write_gif(target: Path, images: list[NDArray]) -> None:
     from PIL import Image
 
     first, *rest = (Image.fromarray(np.asarray(image)) for image in images)
-    first.save(target, save_all=True, append_images=rest, duration=GIF_FRAME_MS, loop=0)
+    with replaced_atomically(target) as tmp:
+        first.save(
+            tmp, format="GIF", save_all=True, append_images=rest, duration=GIF_FRAME_MS, loop=0
+        )

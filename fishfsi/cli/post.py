@@ -32,15 +32,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from fsi_orchestrator.case.params import spec_of  # noqa: E402
 from fsi_orchestrator.case.schema import Actuation, Waveform  # noqa: E402
+from fsi_orchestrator.results import is_write_fault, write_failure  # noqa: E402
 
 from . import pictures  # noqa: E402
 from .common import (  # noqa: E402
     EXIT_BAD_INPUT,
+    EXIT_FAILED,
     EXIT_OK,
     OneLineParser,
     add_version,
     cannot_write,
+    save_figure,
 )
+from .outputs import first_not_finite  # noqa: E402
 from .swimming import plot_swimming_sweep  # noqa: E402
 
 
@@ -301,8 +305,7 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
             writer.writeheader()
             writer.writerows(table)
     target = output / "sweep.png"
-    fig.savefig(target, dpi=120)
-    plt.close(fig)
+    save_figure(fig, target)
     return target
 
 
@@ -318,6 +321,17 @@ def plot_run(h5_path: Path, output: Path) -> Path:
             f"{h5_path}: no windows yet (the run stopped in its set-up, or is in its first "
             "window): nothing to draw"
         )
+    bad = first_not_finite(h5_path)
+    if bad is not None:  # draw the windows before it, then say so and fail
+        keep = bad[1]
+        broken = (
+            f"{h5_path}: {bad[0]} is not finite from window {keep + 1} on (a run that "
+            "diverged, or a damaged file)"
+        )
+        if keep == 0:
+            raise PostError(f"{broken}; nothing to draw")
+        t, tip = t[:keep], tip[:keep]
+        force, thrust, solves = (None if a is None else a[:keep] for a in (force, thrust, solves))
     panels = 1 + (force is not None or thrust is not None) + (solves is not None)
     fig, axes = plt.subplots(panels, 1, figsize=(6.5, 2.4 * panels), sharex=True, squeeze=False)
     axes = axes[:, 0]
@@ -340,8 +354,9 @@ def plot_run(h5_path: Path, output: Path) -> Path:
         ax.grid(True, alpha=0.3)
     fig.tight_layout()
     target = output / "run.png"
-    fig.savefig(target, dpi=120)
-    plt.close(fig)
+    save_figure(fig, target)
+    if bad is not None:
+        raise PostError(f"{broken}; {target} shows the {keep} windows before it")
     return target
 
 
@@ -380,8 +395,7 @@ def plot_flow(pvd: Path, output: Path) -> Path | None:
     axes[-1].set_xlabel("x [m] (nose at 0)")
     fig.tight_layout()
     target = output / "flow.png"
-    fig.savefig(target, dpi=120)
-    plt.close(fig)
+    save_figure(fig, target)
     return target
 
 
@@ -473,15 +487,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PostError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (KeyError, ValueError, OSError) as err:  # not what fsi-run / fsi-sweep write
-        why = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+    except OSError as err:
+        if not is_write_fault(err):
+            return _not_ours(found, err)
+        where = Path(err.filename) if err.filename else output
         print(
-            f"error: {found}: not a table fsi-run or fsi-sweep wrote ({why}); "
-            "point fsi-post at a run's output folder or a sweep's sweep.csv",
+            f"error: {write_failure(where, err, 'the inputs are untouched', 'run it again')}",
             file=sys.stderr,
         )
-        return EXIT_BAD_INPUT
+        return EXIT_FAILED
+    except (KeyError, ValueError) as err:  # not what fsi-run / fsi-sweep write
+        return _not_ours(found, err)
     return EXIT_OK
+
+
+def _not_ours(found: Path, err: Exception) -> int:
+    why = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+    print(
+        f"error: {found}: not a table fsi-run or fsi-sweep wrote ({why}); "
+        "point fsi-post at a run's output folder or a sweep's sweep.csv",
+        file=sys.stderr,
+    )
+    return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

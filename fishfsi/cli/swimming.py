@@ -20,6 +20,8 @@ from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.planform import resolve_fish
 from fsi_orchestrator.case.schema import ThrustModel
 
+from .common import save_figure
+
 if TYPE_CHECKING:
     from fluid_adapter.swimming import BodyDrag, Turning
 
@@ -239,6 +241,5 @@ def plot_swimming_sweep(csv_path: Path, output: Path) -> Path | None:
     axes[-1].set_xlabel("driving frequency [Hz]")
     fig.tight_layout()
     target = output / "swimming.png"
-    fig.savefig(target, dpi=120)
-    plt.close(fig)
+    save_figure(fig, target)
     return target

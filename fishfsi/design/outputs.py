@@ -7,7 +7,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 import shutil
 from pathlib import Path
 
@@ -15,7 +14,7 @@ import numpy as np
 
 from fsi_orchestrator.case.loader import CASE_FILE
 
-from ..cli.common import json_text
+from ..cli.common import json_text, replaced_atomically, save_figure
 from .evaluate import SUMMARY_FILE, atomic_write, finite, is_ok
 from .study import Study
 
@@ -54,9 +53,8 @@ def write_tables(records: list[dict], study: Study, output: Path) -> None:
 def write_h5(rows: list[dict], study: Study, path: Path) -> None:
     import h5py
 
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     strings = h5py.string_dtype()
-    with h5py.File(tmp, "w") as h5:
+    with replaced_atomically(path) as tmp, h5py.File(tmp, "w") as h5:
         h5.attrs["title"] = study.title
         h5.attrs["base_case"] = str(study.base_case)
         h5.attrs["method"] = study.method.kind.value
@@ -73,7 +71,6 @@ def write_h5(rows: list[dict], study: Study, path: Path) -> None:
         h5["folder"] = np.array([int(r["folder"]) for r in rows])
         for name in ("status", "reason", "stage", *(f"fidelity_{k}" for k in FIDELITY_COLUMNS)):
             h5.create_dataset(name, data=[str(r[name]) for r in rows], dtype=strings)
-    os.replace(tmp, path)
 
 
 def write_best_case(best: dict, output: Path) -> Path:
@@ -82,9 +79,8 @@ def write_best_case(best: dict, output: Path) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     source = output / "evaluations" / f"{best['index']:04d}"
     for name in (CASE_FILE, SUMMARY_FILE):
-        tmp = folder / f".{name}.tmp"
-        shutil.copyfile(source / name, tmp)
-        os.replace(tmp, folder / name)
+        with replaced_atomically(folder / name) as tmp:
+            shutil.copyfile(source / name, tmp)
     return folder
 
 
@@ -141,8 +137,7 @@ def plot_response(records: list[dict], study: Study, path: Path) -> Path:
         ax.set_ylabel(_label(q))
         ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 
@@ -164,8 +159,7 @@ def plot_history(records: list[dict], study: Study, path: Path) -> Path:
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return path
 
 
@@ -188,6 +182,5 @@ def plot_pareto(records: list[dict], front: list[dict], study: Study, path: Path
     ax.legend()
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return path

@@ -15,9 +15,11 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from fsi_orchestrator.case import CaseError
 
-from .evaluate import Design, EvaluationSpec, design_key, evaluate, read_record
+from .evaluate import Design, EvaluationSpec, design_key, evaluate, finite, is_ok, read_record
 from .study import Study
 
 IDENTITY_FILE = "study.json"
@@ -46,19 +48,25 @@ def refuse_earlier_study(output: Path, identity: dict, resume: bool, overwrite: 
     would wait forever)."""
     evaluations = output / "evaluations"
     identity_file = output / IDENTITY_FILE
-    if resume and identity_file.is_file():
+    held = 0
+    if evaluations.is_dir():
+        held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
+    if resume and (identity_file.is_file() or held):
         try:
             old = json.loads(identity_file.read_text())
         except (OSError, ValueError):
             old = None
         if old != identity:
+            if old is None:  # evaluations whose study is unknown are no safer to reuse
+                why = f"a study it cannot tell ({IDENTITY_FILE} is missing or damaged)"
+            else:
+                why = "another study (its study.toml, base case or version differ)"
             raise CaseError(
-                f"--resume: {output} holds evaluations of another study (its study.toml, "
-                "base case or version differ); use another --output, or drop --resume"
+                f"--resume: {output} holds evaluations of {why}; use another --output, or "
+                "replace them with --overwrite"
             )
-    if resume or overwrite or not evaluations.is_dir():
+    if resume or overwrite:
         return
-    held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
     if held:
         raise CaseError(
             f"--output {output}: holds {held} evaluations of an earlier study; continue it "
@@ -85,14 +93,27 @@ def prepare_output(
     if resume:
         for folder in sorted(evaluations.iterdir()):
             record = read_record(folder)
-            if record is not None and record.get("status") in ("ok", "infeasible"):
-                done[record["key"]] = record  # a failed design is tried again
+            if record is not None and finished(record):
+                done[record["key"]] = record  # a failed or damaged design is tried again
     else:
         shutil.rmtree(evaluations)
         evaluations.mkdir()
         shutil.rmtree(output / "best_case", ignore_errors=True)  # an earlier study's
     atomic_write(identity_file, json.dumps(identity, indent=1))
     return done
+
+
+def finished(record: dict) -> bool:
+    """A record to reuse: infeasible, or ok with every figure finite (a summary damaged to
+    NaN is evaluated again)."""
+    if record.get("status") == "infeasible":
+        return True
+    objectives = record.get("objectives")
+    return (
+        is_ok(record)
+        and isinstance(objectives, dict)
+        and all(np.isfinite(finite(v)) for v in objectives.values())
+    )
 
 
 class Evaluator:

@@ -50,6 +50,12 @@ class FishParameters:
     head_weight_thickness_m: float
     head_weight_x_m: float | None = None  # default: radius + 3 mm
 
+    @property
+    def head_weight_centre_x_m(self) -> float:
+        if self.head_weight_x_m is not None:
+            return self.head_weight_x_m
+        return self.head_weight_radius_m + 3e-3
+
 
 _MM = 1e-3
 # Tables 3.4 / 4.1: L 167, H 55, peduncle 30, fin 50, CFRP 0.2, MFC 112 x 40 (active 85 x 28),
@@ -175,6 +181,14 @@ def resolve_fish(case: Case) -> FishParameters:
         p.active_width_m <= p.actuator_width_m,
         "geometry.active_width_m",
         f"must be <= geometry.actuator_width_m ({p.actuator_width_m:g})",
+    )
+    r, x_w = p.head_weight_radius_m, p.head_weight_centre_x_m
+    high = float(fish_height(p, np.array([x_w]))[0]) if 0 <= x_w <= L else 0.0
+    check(
+        r <= x_w <= L - r and 2 * r <= high,
+        "geometry.head_weight_x_m",
+        f"and geometry.head_weight_radius_m put a head weight of radius {r:g} m at x = "
+        f"{x_w:g} m, where it does not fit on the plate ({L:g} m long, {high:.4g} m high there)",
     )
     x_end = p.actuator_start_x_m + p.actuator_length_m
     check(
