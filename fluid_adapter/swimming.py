@@ -68,9 +68,6 @@ SKIN_FRICTION_LINES = ("ittc-1957", "blasius")
 ITTC_MIN_REYNOLDS = 1e3  # the ITTC line diverges at Re = 100
 MAX_SPEED_M_S = 50.0  # no root below this: the motion or the drag is not physical
 MAX_SLIP_RAD = 0.5
-SLIP_SCAN_START_RAD = 1e-3  # the first brackets of the nearest roots
-YAW_SCAN_START_RAD_S = 1e-3
-MAX_YAW_RATE_RAD_S = 1e3
 
 
 class SwimmingError(RuntimeError):
@@ -243,25 +240,15 @@ def _mean_sheet_velocity(x: NDArray, b: NDArray, w_mean: NDArray) -> NDArray:
     return w_star
 
 
-def _nearest_root(f, start: float, limit: float) -> float | None:
-    """The root of ``f`` nearest 0 within [-limit, limit], brackets doubling outward from
-    ``start``; None where ``f`` keeps its sign. The nearest, because the far roots belong to
-    other branches: at low speed a symmetric drive would spin on them."""
-    f0 = f(0.0)
-    if f0 == 0.0:
-        return 0.0
-    near, width = 0.0, start
-    while near < limit:
-        far = min(near + width, limit)
-        roots = [
-            brentq(f, side * near, side * far, xtol=1e-12, rtol=1e-12)
-            for side in (1.0, -1.0)
-            if f(side * far) * f0 <= 0
-        ]
-        if roots:
-            return min(roots, key=abs)
-        near, width = far, 2 * width
-    return None
+def mirrored_over_half_a_period(h: NDArray, rtol: float = 1e-9) -> bool:
+    """Whether the midline history ``h`` (one period of samples, n_t, n_x) is its own mirror
+    image half a period later, h(t + T/2) = -h(t): a symmetric drive's motion. The side force
+    and the yaw moment are odd in h and do not change with a shift in time, so they vanish."""
+    h = np.asarray(h, dtype=float)
+    if len(h) % 2:
+        return False
+    scale = float(np.abs(h).max())
+    return scale == 0.0 or float(np.abs(h + np.roll(h, len(h) // 2, axis=0)).max()) <= rtol * scale
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -282,16 +269,25 @@ def turning_rate(x, half_height, h, dt_s, **load) -> Turning:
 
     def slip_of(rate: float) -> float:
         f = lambda s: loads(s, rate).side_force_n  # noqa: E731
-        root = _nearest_root(f, SLIP_SCAN_START_RAD, MAX_SLIP_RAD)
-        return 0.0 if root is None else root  # None: no side force to cancel (no lift)
+        lo, hi = f(-MAX_SLIP_RAD), f(MAX_SLIP_RAD)
+        if not lo * hi < 0:  # no side force to cancel (at rest, no lift)
+            return 0.0
+        return brentq(f, -MAX_SLIP_RAD, MAX_SLIP_RAD, xtol=1e-12)
 
     def moment(rate: float) -> float:
         return loads(slip_of(rate), rate).yaw_moment_nm
 
+    if mirrored_over_half_a_period(h):  # N = 0 exactly: what is left is round-off, and at a
+        # low speed the yaw balance near 0 is unstable, so round-off would pick a far root
+        return Turning(yaw_rate_rad_s=0.0, slip_rad=0.0, drive_moment_nm=0.0)
     drive = moment(0.0)
     if drive == 0.0:
         return Turning(yaw_rate_rad_s=0.0, slip_rad=slip_of(0.0), drive_moment_nm=0.0)
-    rate = _nearest_root(moment, YAW_SCAN_START_RAD_S, MAX_YAW_RATE_RAD_S)
-    if rate is None:
-        raise SwimmingError("no yaw damping balances the drive's yaw moment")
+    # the damping grows with Omega: bracket on the side that opposes the drive
+    step = -np.sign(drive) * 0.01
+    while moment(step) * drive > 0:
+        step *= 2
+        if abs(step) > 1e3:
+            raise SwimmingError("no yaw damping balances the drive's yaw moment")
+    rate = brentq(moment, 0.0, step, xtol=1e-12, rtol=1e-12)
     return Turning(yaw_rate_rad_s=rate, slip_rad=slip_of(rate), drive_moment_nm=drive)

@@ -86,7 +86,7 @@ def test_a_check_of_the_resolved_plate_names_the_set_it_follows_from(tmp_path):
     assert done.stderr.strip() == (
         "error: --set 'geometry.head_weight_radius_m=0.09': geometry.head_weight_x_m and "
         "geometry.head_weight_radius_m put a head weight of radius 0.09 m at x = 0.093 m, where "
-        "it does not fit on the plate (0.167 m long, 0.055 m high there)"
+        "it does not fit on the plate (0.167 m long, as little as 0.03178 m high under it)"
     )
     done = modal("fluid.model=potential", "boundary.clamp_length_m=0.2")
     assert done.returncode == 2

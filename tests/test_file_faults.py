@@ -614,8 +614,39 @@ def test_fsi_post_draws_a_results_file_only_up_to_its_first_nan(done, capsys):
     case, out = done
     with h5py.File(out / "results.h5", "a") as h5:
         h5["shell/tip_displacement_m"][6] = np.nan
-    assert post_cli.main([str(out)]) == 2
+    assert post_cli.main([str(out)]) == 1  # as fsi-run ends a diverged run
     lines = capsys.readouterr().err.strip().splitlines()
     line = one_line_naming(lines, out / "results.h5", "shell/tip_displacement_m", "window 7")
     assert "run.png shows the 6 windows before it" in line
     assert (out / "run.png").stat().st_size > 0
+
+
+def test_fsi_post_takes_a_denied_read_for_the_inputs_fault_not_a_write(
+    tmp_path, capsys, monkeypatch
+):
+    (tmp_path / "sweep.csv").write_text("waveform,frequency_hz,tip_amplitude_m\nsine,3,0.01\n")
+
+    def denied(path):
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+
+    monkeypatch.setattr(post_cli, "read_sweep", denied)
+    assert post_cli.main([str(tmp_path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    one_line_naming(lines, tmp_path / "sweep.csv", "Permission denied")
+    assert "not writable" not in lines[0]
+
+
+def test_a_failed_atomic_write_leaves_no_temporary_file_and_names_the_target(tmp_path):
+    """A row's temporary name never ends in .json, so a folder's *.json never lists it."""
+    from fishfsi.cli.common import WriteFault, replaced_atomically
+
+    target = tmp_path / "sine_5Hz.json"
+    with replaced_atomically(target) as tmp:
+        assert not tmp.name.endswith(".json")
+        tmp.write_text("{}")
+    assert [p.name for p in tmp_path.iterdir()] == ["sine_5Hz.json"]
+    with pytest.raises(WriteFault) as caught, replaced_atomically(tmp_path / "b.json") as tmp:
+        tmp.write_text("{")
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    assert caught.value.filename == str(tmp_path / "b.json")
+    assert [p.name for p in tmp_path.iterdir()] == ["sine_5Hz.json"]

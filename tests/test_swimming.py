@@ -17,6 +17,7 @@ from fluid_adapter.swimming import (
     BodyDrag,
     FormDrag,
     mean_thrust,
+    mirrored_over_half_a_period,
     self_propelled_speed,
     skin_friction_coefficient,
     turning_rate,
@@ -86,9 +87,9 @@ def bent_body(sign: float, bend: float):
     return x, b, dt, sign * (h + bend * (x / 0.167) ** 2)
 
 
-def turning_of(sign: float, bend: float) -> float:
+def turning_of(sign: float, bend: float, speed: float = 0.5) -> float:
     x, b, dt, h = bent_body(sign, bend)
-    load = dict(speed_m_s=0.5, x_ref_m=0.06, density_kg_m3=RHO, crossflow_drag_coefficient=1.2)
+    load = dict(speed_m_s=speed, x_ref_m=0.06, density_kg_m3=RHO, crossflow_drag_coefficient=1.2)
     return turning_rate(x, b, h, dt, **load).yaw_rate_rad_s
 
 
@@ -97,6 +98,18 @@ def test_turning_flips_with_the_mirrored_drive_and_vanishes_without_a_mean_bend(
     assert right < 0
     assert turning_of(-1.0, -0.01) == pytest.approx(-right, rel=1e-9)
     assert turning_of(1.0, 0.0) == pytest.approx(0.0, abs=1e-9 * abs(right))
+
+
+def test_at_a_low_speed_a_symmetric_drive_does_not_turn_and_a_bent_tail_turns_its_way():
+    """At 0.05 m/s the yaw balance near 0 is unstable (the moment grows with the rate); the
+    symmetric motion's N is 0 exactly, and a bent tail turns toward its bend on the stable
+    root."""
+    assert mirrored_over_half_a_period(bent_body(1.0, 0.0)[3])
+    assert not mirrored_over_half_a_period(bent_body(1.0, -1e-4)[3])
+    assert turning_of(1.0, 0.0, speed=0.05) == 0.0
+    for bend in (-0.003, -0.01):
+        assert turning_of(1.0, bend, speed=0.05) < 0  # right
+        assert turning_of(-1.0, bend, speed=0.05) > 0  # mirrored: left
 
 
 def fsi_run(capsys, *overrides: str) -> tuple[int, str, str]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import json
 import math
 import os
@@ -16,6 +17,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError, load_case
+from fsi_orchestrator.results import is_write_fault
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # the reader of stdout left (`| head`), as a shell's tools
@@ -232,7 +234,6 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
     (SLURM's time limit, scancel) stops it as Ctrl-C does: one line, exit 130;
     ``interrupted`` says what is kept."""
     from fsi_orchestrator.loop import ResumeError
-    from fsi_orchestrator.results import is_write_fault
     from solid_adapter.solvers import SolverError  # the composition root may know adapters
 
     try:
@@ -249,14 +250,21 @@ def guarded(body: Callable[[], int], interrupted: str = RESUMABLE) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
     except OSError as err:
-        if not is_write_fault(err):
+        # a full disk or a read-only folder met past the up-front checks; a denied read is
+        # no write fault, so "permission denied" is all that is said of it
+        if not is_write_fault(err) or not (err.filename or err.errno in FULL):
             raise
-        # a full disk or a read-only folder met anywhere past the up-front checks
         from fsi_orchestrator.results import write_failure
 
-        where = Path(err.filename) if err.filename else Path.cwd()
         kept, _, then = interrupted.partition("; ")
-        print(f"error: {write_failure(where, err, kept, then or 'run it again')}", file=sys.stderr)
+        then = then or "run it again"
+        if not err.filename:  # a stream (stdout to a full disk) has no name to give
+            line = f"a write failed ({err.strerror}); {kept}; free space, then {then}"
+        elif isinstance(err, WriteFault) or err.errno not in (errno.EACCES, errno.EPERM):
+            line = str(write_failure(Path(err.filename), err, kept, then))
+        else:
+            line = f"{err.filename}: permission denied; {kept}; fix its permissions, then {then}"
+        print(f"error: {line}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt as err:  # Ctrl-C, or a SIGTERM the loop turned into a checkpoint
         from fsi_orchestrator.participant import ParticipantStopped
@@ -296,19 +304,30 @@ def output_folder(given: str | None, default: Path) -> Path:
     return Path(given).absolute()
 
 
+FULL = (errno.ENOSPC, errno.EDQUOT)
+
+
+class WriteFault(OSError):
+    """A write of the command's own output that the disk refused (full, read-only, denied)."""
+
+
 @contextlib.contextmanager
-def replaced_atomically(path: Path) -> Iterator[Path]:
+def replaced_atomically(path: Path, keep_suffix: bool = False) -> Iterator[Path]:
     """A temporary name beside ``path`` to write to; renamed to ``path`` when the block ends,
-    removed when it fails (a full disk leaves no half file and no litter)."""
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    removed when it fails (a full disk leaves no half file and no litter). ``keep_suffix``
+    for a writer that picks its format from the name; otherwise the name ends in ``.tmp``,
+    so that a folder's ``*.json`` or ``*.csv`` never lists it."""
+    end = f".tmp{path.suffix}" if keep_suffix else ".tmp"
+    tmp = path.with_name(f".{path.name}.{os.getpid()}{end}")
     try:
         yield tmp
         os.replace(tmp, path)
     except BaseException as err:
         with contextlib.suppress(OSError):
             tmp.unlink()
-        if isinstance(err, OSError) and err.errno is not None and err.filename in (None, str(tmp)):
-            raise OSError(err.errno, err.strerror, str(path)) from None  # name what was meant
+        if isinstance(err, OSError) and not isinstance(err, WriteFault) and is_write_fault(err):
+            # named as the file meant, not the temporary one; callers can tell a write
+            raise WriteFault(err.errno, err.strerror, str(path)) from err
         raise
 
 

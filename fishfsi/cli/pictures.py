@@ -120,7 +120,7 @@ def draw(vtk: Path, output: Path, period_s: float | None) -> list[Path]:
     plotter = pv.Plotter(off_screen=True, window_size=WINDOW)
     render(plotter, *meshes[-1])
     still = output / "fish3d.png"
-    with replaced_atomically(still) as tmp:
+    with replaced_atomically(still, keep_suffix=True) as tmp:
         plotter.screenshot(str(tmp))
     written.append(still)
     images = []

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import copy
 import csv
-import dataclasses
+import errno
+import io
 import json
 import re
 import sys
@@ -30,17 +31,19 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from fsi_orchestrator.case.params import spec_of  # noqa: E402
-from fsi_orchestrator.case.schema import Actuation, Waveform  # noqa: E402
-from fsi_orchestrator.results import is_write_fault, write_failure  # noqa: E402
+from fsi_orchestrator.case.schema import Waveform, key_spec  # noqa: E402
+from fsi_orchestrator.results import write_failure  # noqa: E402
 
 from . import pictures  # noqa: E402
 from .common import (  # noqa: E402
     EXIT_BAD_INPUT,
     EXIT_FAILED,
     EXIT_OK,
+    FULL,
     OneLineParser,
+    WriteFault,
     add_version,
+    atomic_write,
     cannot_write,
     save_figure,
 )
@@ -95,10 +98,14 @@ def overlay_seed(ax_amp, ax_thrust) -> None:
     ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
 
 
-_FREQUENCY = spec_of(next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz"))
+_FREQUENCY = key_spec("actuation.frequency_hz")  # a row's frequency, as a case's
 assert _FREQUENCY.ge is not None and _FREQUENCY.le is not None
-FREQUENCY_RANGE_HZ = (_FREQUENCY.ge, _FREQUENCY.le)  # a row's frequency, as a case's
+FREQUENCY_RANGE_HZ = (_FREQUENCY.ge, _FREQUENCY.le)
 WAVEFORMS = tuple(w.value for w in Waveform)
+
+
+class DivergedRun(RuntimeError):
+    """A results file holding NaN: drawn up to it, and a failure (as fsi-run's exit)."""
 
 
 class PostError(ValueError):
@@ -118,6 +125,7 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
     missing = [c for c in SWEEP_COLUMNS if c not in rows[0]]
     if missing:
         raise PostError(f"{csv_path}: not a table fsi-sweep wrote (no column {missing[0]!r})")
+    lo, hi = FREQUENCY_RANGE_HZ
     for line, row in enumerate(rows, start=2):  # line 1 is the header
         if None in row or None in row.values():  # cut short, or cells past the header's
             header = sum(k is not None for k in row)
@@ -143,7 +151,6 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
                     f"{csv_path}, line {line}: {key} = {text!r} is not finite for a point "
                     f"whose status is {row.get('status', 'ok')!r}"
                 )
-            lo, hi = FREQUENCY_RANGE_HZ
             if key == "frequency_hz" and not lo <= value <= hi:
                 raise PostError(
                     f"{csv_path}, line {line}: frequency_hz = {text!r} is outside the "
@@ -299,11 +306,12 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
         ax.legend(fontsize="small")
     fig.tight_layout()
     if table:
-        with open(output / "sweep_errors.csv", "w", newline="") as fh:
-            # "\n" line ends, as sweep.csv (csv's default is "\r\n")
-            writer = csv.DictWriter(fh, fieldnames=list(table[0]), lineterminator="\n")
-            writer.writeheader()
-            writer.writerows(table)
+        text = io.StringIO()
+        # "\n" line ends, as sweep.csv (csv's default is "\r\n")
+        writer = csv.DictWriter(text, fieldnames=list(table[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(table)
+        atomic_write(output / "sweep_errors.csv", text.getvalue())
     target = output / "sweep.png"
     save_figure(fig, target)
     return target
@@ -329,7 +337,7 @@ def plot_run(h5_path: Path, output: Path) -> Path:
             "diverged, or a damaged file)"
         )
         if keep == 0:
-            raise PostError(f"{broken}; nothing to draw")
+            raise DivergedRun(f"{broken}; nothing to draw")
         t, tip = t[:keep], tip[:keep]
         force, thrust, solves = (None if a is None else a[:keep] for a in (force, thrust, solves))
     panels = 1 + (force is not None or thrust is not None) + (solves is not None)
@@ -356,7 +364,7 @@ def plot_run(h5_path: Path, output: Path) -> Path:
     target = output / "run.png"
     save_figure(fig, target)
     if bad is not None:
-        raise PostError(f"{broken}; {target} shows the {keep} windows before it")
+        raise DivergedRun(f"{broken}; {target} shows the {keep} windows before it")
     return target
 
 
@@ -487,8 +495,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PostError as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except DivergedRun as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_FAILED
     except OSError as err:
-        if not is_write_fault(err):
+        # its own pictures' writes (named WriteFault); a denied read is the input's
+        if not (isinstance(err, WriteFault) or err.errno in (*FULL, errno.EROFS)):
             return _not_ours(found, err)
         where = Path(err.filename) if err.filename else output
         print(

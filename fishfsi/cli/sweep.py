@@ -50,8 +50,8 @@ import h5py
 import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
-from fsi_orchestrator.case.params import coerce, spec_of
-from fsi_orchestrator.case.schema import Actuation, FluidModel, GeometryKind, Waveform
+from fsi_orchestrator.case.params import coerce
+from fsi_orchestrator.case.schema import FluidModel, GeometryKind, Waveform, key_spec
 
 from .common import (
     EXIT_BAD_INPUT,
@@ -101,8 +101,7 @@ PERIODIC_KEYS = (
 
 def parse_frequencies(text: str) -> list[float]:
     """ "1:25:2" -> 1, 3, ..., 25; "3,5,10" -> those."""
-    field = next(f for f in dataclasses.fields(Actuation) if f.name == "frequency_hz")
-    spec = spec_of(field)  # each point is a case: the key's own range holds
+    spec = key_spec("actuation.frequency_hz")  # each point is a case: the key's own range holds
     usage = (
         f"--frequencies {text!r}: use start:stop:step or a,b,c (Hz, each from {spec.ge:g} to "
         f"{spec.le:g})"

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from fsi_orchestrator.case import Case
+from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.planform import resolve_fish
 from fsi_orchestrator.case.schema import ThrustModel
 
@@ -125,8 +125,16 @@ def swimming_model(case: Case, model, x_m: NDArray) -> SwimmingModel:
     mass, x_cm, volume = _mass_and_volume(model)
     float_volume = s.float_volume_m3
     if float_volume is None:  # neutral buoyancy: the float carries what the liquid does not
-        excess = mass - fluid.density_kg_m3 * volume
-        float_volume = max(excess, 0.0) / (fluid.density_kg_m3 - s.float_density_kg_m3)
+        excess = max(mass - fluid.density_kg_m3 * volume, 0.0)
+        lift = fluid.density_kg_m3 - s.float_density_kg_m3
+        if excess > 0 and not lift > 0:
+            raise CaseError(
+                f"swimming.float_density_kg_m3 = {s.float_density_kg_m3:g} is not below "
+                f"fluid.density_kg_m3 = {fluid.density_kg_m3:g}: a float that does not rise "
+                f"cannot carry the robot's {1e3 * excess:.3g} g beyond its buoyancy; give a "
+                "lighter float or its volume (swimming.float_volume_m3)"
+            )
+        float_volume = excess / lift if excess > 0 else 0.0
     p = resolve_fish(case)
     form = (
         FormDrag(

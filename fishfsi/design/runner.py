@@ -48,10 +48,13 @@ def refuse_earlier_study(output: Path, identity: dict, resume: bool, overwrite: 
     would wait forever)."""
     evaluations = output / "evaluations"
     identity_file = output / IDENTITY_FILE
-    held = 0
-    if evaluations.is_dir():
-        held = sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
-    if resume and (identity_file.is_file() or held):
+
+    def held() -> int:
+        if not evaluations.is_dir():
+            return 0
+        return sum(1 for folder in evaluations.iterdir() if read_record(folder) is not None)
+
+    if resume and (identity_file.is_file() or held()):
         try:
             old = json.loads(identity_file.read_text())
         except (OSError, ValueError):
@@ -67,9 +70,10 @@ def refuse_earlier_study(output: Path, identity: dict, resume: bool, overwrite: 
             )
     if resume or overwrite:
         return
-    if held:
+    count = held()
+    if count:
         raise CaseError(
-            f"--output {output}: holds {held} evaluations of an earlier study; continue it "
+            f"--output {output}: holds {count} evaluations of an earlier study; continue it "
             "with --resume, write elsewhere with --output, or replace it with --overwrite"
         )
 
@@ -96,8 +100,14 @@ def prepare_output(
             if record is not None and finished(record):
                 done[record["key"]] = record  # a failed or damaged design is tried again
     else:
-        shutil.rmtree(evaluations)
-        evaluations.mkdir()
+        try:
+            shutil.rmtree(evaluations)
+            evaluations.mkdir()
+        except OSError as err:
+            raise CaseError(
+                f"--overwrite: cannot replace {err.filename or evaluations} ({err.strerror}); "
+                "make the folder writable or use another --output"
+            ) from None
         shutil.rmtree(output / "best_case", ignore_errors=True)  # an earlier study's
     atomic_write(identity_file, json.dumps(identity, indent=1))
     return done
@@ -109,11 +119,14 @@ def finished(record: dict) -> bool:
     if record.get("status") == "infeasible":
         return True
     objectives = record.get("objectives")
-    return (
-        is_ok(record)
-        and isinstance(objectives, dict)
-        and all(np.isfinite(finite(v)) for v in objectives.values())
-    )
+    try:
+        return (
+            is_ok(record)
+            and isinstance(objectives, dict)
+            and all(np.isfinite(finite(v)) for v in objectives.values())
+        )
+    except (TypeError, ValueError):  # a figure that is no number
+        return False
 
 
 class Evaluator:

@@ -270,15 +270,7 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 'analysis.kind = "swimming" needs a liquid to swim in: fluid.model = '
                 '"potential" or "slender_body" (or "openfoam" for a flume), got "none"'
             )
-        sw = case.swimming
-        if sw.float_volume_m3 is None and case.fluid.density_kg_m3 <= sw.float_density_kg_m3:
-            raise CaseError(
-                f"swimming.float_density_kg_m3 = {sw.float_density_kg_m3:g} is not below "
-                f"fluid.density_kg_m3 = {case.fluid.density_kg_m3:g}: a float that does not "
-                "rise cannot make the robot neutrally buoyant; give a lighter float or its "
-                "volume (swimming.float_volume_m3)"
-            )
-        speed = sw.speed_m_s
+        speed = case.swimming.speed_m_s
         if case.fluid.model.value == "openfoam" and (speed is None or speed <= 0):
             raise CaseError(
                 'swimming.speed_m_s: a swimming case with fluid.model = "openfoam" is a flume '

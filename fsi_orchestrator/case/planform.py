@@ -183,12 +183,14 @@ def resolve_fish(case: Case) -> FishParameters:
         f"must be <= geometry.actuator_width_m ({p.actuator_width_m:g})",
     )
     r, x_w = p.head_weight_radius_m, p.head_weight_centre_x_m
-    high = float(fish_height(p, np.array([x_w]))[0]) if 0 <= x_w <= L else 0.0
+    span = np.linspace(max(x_w - r, 0.0), min(x_w + r, L), 21)
+    high = float(fish_height(p, span).min()) if 0 <= x_w <= L else 0.0  # the disk's narrowest
     check(
         r <= x_w <= L - r and 2 * r <= high,
         "geometry.head_weight_x_m",
         f"and geometry.head_weight_radius_m put a head weight of radius {r:g} m at x = "
-        f"{x_w:g} m, where it does not fit on the plate ({L:g} m long, {high:.4g} m high there)",
+        f"{x_w:g} m, where it does not fit on the plate ({L:g} m long, as little as {high:.4g} m "
+        "high under it)",
     )
     x_end = p.actuator_start_x_m + p.actuator_length_m
     check(

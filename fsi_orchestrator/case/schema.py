@@ -7,11 +7,11 @@ geometry preset or the documented default". ``docs/case_format.md`` is generated
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from enum import StrEnum
 from pathlib import Path
 
-from .params import param
+from .params import ParamSpec, param, spec_of
 
 MFC_VOLTAGE_RANGE_V = (-500.0, 1500.0)  # Table 3.1 / Sec. 3.1.2: safe drive range of the M8528-P1
 
@@ -977,3 +977,10 @@ class Case:
     @property
     def name(self) -> str:
         return self.directory.name
+
+
+def key_spec(key: str) -> ParamSpec:
+    """The range and unit of a case key, ``section.key`` (e.g. the drive frequency's, which a
+    sweep's frequencies and a sweep table's rows obey too)."""
+    section, _, name = key.partition(".")
+    return spec_of(next(f for f in fields(SECTIONS[section]) if f.name == name))
