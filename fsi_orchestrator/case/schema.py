@@ -809,7 +809,7 @@ class Coupling:
         "are iterated until the periods agree to the tolerance, so the figures a run ends "
         "with are iterated windows'. For drives where one solve per window stays off the "
         "iterated state or diverges: square waves (3 Hz coarse: +3 % in thrust), sines above "
-        "13-15 Hz; with a sine below that, explicit-am settles within 0.1-0.4 % of it "
+        "15 Hz; with a sine up to that, explicit-am settles within 0.1-0.4 % of it "
         "(docs/coupling.md). A run that ends before it iterates (under 4 periods) says so.",
     )
     explicit_fallback_windows: tuple[int, ...] = param(
