@@ -12,7 +12,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fishfsi.cli.compose import shell_with_fast_fluid  # noqa: E402
+from fishfsi.cli.fast_model import shell_with_fast_fluid  # noqa: E402
 from fishfsi.cli.linear import linear_sweep  # noqa: E402
 from fishfsi.cli.run import run_dynamic  # noqa: E402
 from fishfsi.cli.sweep import parse_frequencies  # noqa: E402

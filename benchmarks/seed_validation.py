@@ -39,7 +39,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fishfsi.cli.linear import case_edge_inertia  # noqa: E402
+from fishfsi.cli.fast_model import case_edge_inertia  # noqa: E402
 from fluid_adapter.drag import edge_drag  # noqa: E402
 from fluid_adapter.fast import fast_added_mass  # noqa: E402
 from fluid_adapter.slender_body import mean_thrust_from_shell  # noqa: E402

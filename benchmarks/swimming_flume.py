@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from fishfsi.cli.compose import without_cfd  # noqa: E402
+from fishfsi.cli.fast_model import without_cfd  # noqa: E402
 from fishfsi.cli.flume import flume_case, flume_summary  # noqa: E402
 from fishfsi.cli.linear import swimming_summary  # noqa: E402
 from fluid_adapter.openfoam.prescribed import run_periodic  # noqa: E402

@@ -78,7 +78,7 @@ def test_the_linear_sweeps_fixed_point_settles_on_its_own_mass():
     """The serial design of Fig. 5.5 at 24 mm peduncle (3 Hz, held), near its first wet mode:
     the sweep's answer is the fixed point of drag and mass on its own response, as 300 plain
     half-relaxed steps from rest find it (a stop on one small step fell 1.1 % high)."""
-    from fishfsi.cli.linear import case_edge_inertia, linear_model
+    from fishfsi.cli.fast_model import case_edge_inertia, linear_model
     from fsi_orchestrator.case.schema import Waveform
     from solid_adapter.harmonic import sweep_response
     from solid_adapter.piezo import DriveSignal
@@ -116,8 +116,7 @@ def test_the_linear_sweeps_fixed_point_settles_on_its_own_mass():
 def test_a_fast_transient_holds_the_edge_inertia_of_its_linear_orbit(sets, carried):
     """The transient's shell carries, beside the potential added mass, the nodal masses the
     linear sweep finds at the case's drive; not without the edge drag, nor when swimming."""
-    from fishfsi.cli.compose import shell_with_fast_fluid
-    from fishfsi.cli.linear import case_edge_inertia, linear_model
+    from fishfsi.cli.fast_model import case_edge_inertia, linear_model, shell_with_fast_fluid
     from fsi_orchestrator.case.schema import Waveform
 
     coarse = ["mesh.level=coarse", "fluid.mesh_level=coarse", *sets]

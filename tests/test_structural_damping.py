@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from fishfsi.cli import run as run_cli
-from fishfsi.cli.compose import shell_with_fast_fluid
+from fishfsi.cli.fast_model import shell_with_fast_fluid
 from fsi_orchestrator.case.loader import load_case
 from solid_adapter.build import (
     bending_frequencies,

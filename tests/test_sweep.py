@@ -15,7 +15,7 @@ import pytest
 from fishfsi.cli import post as post_cli
 from fishfsi.cli import run as run_cli
 from fishfsi.cli import sweep as sweep_cli
-from fishfsi.cli.compose import shell_with_fast_fluid
+from fishfsi.cli.fast_model import shell_with_fast_fluid
 from fsi_orchestrator.case import CaseError, load_case
 from fsi_orchestrator.case.schema import Waveform
 from solid_adapter.build import (

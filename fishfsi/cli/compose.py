@@ -10,7 +10,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import FluidDomain, FluidModel
@@ -22,63 +21,6 @@ from fsi_orchestrator.participant import (
 
 if TYPE_CHECKING:
     from fsi_orchestrator.coupling import Coupling
-
-
-def without_cfd(case: Case) -> Case:
-    """A study that needs no CFD (modes, the linear frequency sweep): an OpenFOAM case is
-    analysed with the potential model in its tank."""
-    if case.fluid.model is not FluidModel.OPENFOAM:
-        return case
-    fluid = dataclasses.replace(case.fluid, model=FluidModel.POTENTIAL, domain=FluidDomain.TANK)
-    return dataclasses.replace(case, fluid=fluid)
-
-
-def shell_with_fast_fluid(case: Case, edge_inertia: bool = False):
-    """The shell model, with the fast fluid's added mass in its inertia when the case has one.
-    ``edge_inertia``: add the edge inertia (fluid.edge_inertia) at the amplitude of the
-    case's periodic orbit, as a transient carries it. Returns (model, added_mass or None)."""
-    from fluid_adapter.fast import fast_added_mass
-    from solid_adapter.build import build_shell_model
-
-    model = build_shell_model(case)
-    added = fast_added_mass(case, model)
-    if added is not None:
-        model.set_added_mass(added.matrix)
-        if case.fluid.edge_drag:
-            from fluid_adapter.drag import edge_drag
-
-            from .linear import carries_edge_inertia
-
-            model.fluid_damping = edge_drag(
-                model,
-                case.fluid.density_kg_m3,
-                case.actuation.frequency_hz,
-                frequency_exponent=case.fluid.edge_drag_frequency_exponent,
-            )
-            if edge_inertia and carries_edge_inertia(case):
-                model.set_added_mass(added.matrix + np.diag(orbit_edge_inertia(case, model)))
-    return model, added
-
-
-def orbit_edge_inertia(case: Case, model) -> NDArray:
-    """The edge inertia's nodal masses (kg, on z) at the amplitude of the linear sweep's
-    periodic response to the case's drive: a transient holds them constant, as the linear
-    sweep holds them at its orbit. Where the linear response has no answer, none (a note)."""
-    import sys
-
-    from fluid_adapter.drag import NDOF
-
-    from .linear import SweepError, case_edge_inertia, linear_model
-
-    waveform = case.actuation.waveform
-    try:
-        orbit = linear_model(case, model).response(case.actuation.frequency_hz, waveform)
-    except SweepError as err:
-        print(f"note: no edge inertia ({err})", file=sys.stderr)
-        return np.zeros(model.n_nodes)
-    law = case_edge_inertia(case, model)
-    assert law is not None  # shell_with_fast_fluid asks only where it applies
-    return law.linear(model, orbit).diagonal()[2::NDOF]
 
 
 def added_mass_for_preconditioning(case: Case, shell_model):

@@ -22,8 +22,8 @@ from numpy.typing import NDArray
 from fsi_orchestrator.case import Case, CaseError
 
 from .common import atomic_write, json_text
-from .compose import without_cfd
-from .linear import linear_model, swimming_summary
+from .fast_model import linear_model, without_cfd
+from .linear import swimming_summary
 
 FLUME_FILE = "flume.json"
 FORCES_FILE = "flume_forces.csv"

@@ -9,131 +9,31 @@ theory on that motion, alone and with the shedding efficiency (fluid.thrust_shed
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, Waveform
 
-from .compose import shell_with_fast_fluid, without_cfd
+from .fast_model import SweepError, linear_model, without_cfd
 from .swimming import SWIMMING_KEYS, swimming_model
 
 if TYPE_CHECKING:
-    from solid_adapter.harmonic import ModalSweep, PeriodicResponse
-    from solid_adapter.shell import ShellModel
+    pass
 
 SAMPLES_PER_PERIOD = 64
-MODES = 40  # wet modes in the superposition (with static correction), up to ~300 Hz
+
 
 OnRow = Callable[[str, dict, float], None]  # (point name, row, wall seconds)
-
-
-class SweepError(RuntimeError):
-    """A sweep that cannot go on: a launch whose MPI world does not match its tasks, a linear
-    step without a finite answer (one line, non-zero exit)."""
 
 
 def point_name(waveform: Waveform, frequency_hz: float) -> str:
     """A point's stable name: its run folder and its row file (``sine_3Hz``)."""
     return f"{waveform.value}_{frequency_hz:g}Hz"
-
-
-@dataclass(frozen=True)
-class LinearModel:
-    """What every frequency's response shares: the wet shell, its mean-voltage equilibrium and
-    the modal basis about it."""
-
-    case: Case
-    model: ShellModel  # with the fast fluid's added mass
-    x_static: NDArray
-    sweep: ModalSweep
-    tip: int  # the tail tip's node
-
-    def response(self, frequency_hz: float, waveform: Waveform) -> PeriodicResponse:
-        """The periodic response to the case's drive at ``frequency_hz`` and ``waveform``; the
-        edge drag's damping at that frequency."""
-        from fluid_adapter.drag import edge_drag
-        from solid_adapter.harmonic import damped_sweep_response, sweep_response
-        from solid_adapter.piezo import DriveSignal
-
-        case, model = self.case, self.model
-        drive = DriveSignal.from_case(with_drive(case, frequency_hz, waveform))
-        if case.fluid.edge_drag:
-            drag = edge_drag(
-                model,
-                case.fluid.density_kg_m3,
-                frequency_hz,
-                frequency_exponent=case.fluid.edge_drag_frequency_exponent,
-            )
-            return damped_sweep_response(
-                self.sweep,
-                drive,
-                self.x_static,
-                drag,
-                model,
-                self.tip * 5 + 2,
-                case_edge_inertia(case, model),
-            )
-        return sweep_response(self.sweep, drive, self.x_static)
-
-
-def carries_edge_inertia(case: Case) -> bool:
-    """The edge inertia (fluid.edge_inertia) is fitted in still liquid; a swimming body's
-    edge vortices are swept off by its speed, and the swimming model leaves it out, as it
-    leaves out the thrust's shedding efficiency (docs/swimming.md)."""
-    return (
-        case.fluid.edge_drag
-        and case.fluid.edge_inertia
-        and case.analysis.kind is not AnalysisKind.SWIMMING
-    )
-
-
-def case_edge_inertia(case: Case, model):
-    """The case's edge-inertia law on ``model``'s nodes, or None where it does not apply."""
-    from fluid_adapter.drag import edge_inertia
-
-    if not carries_edge_inertia(case):
-        return None
-    return edge_inertia(model, case.fluid.density_kg_m3, case.fluid.edge_inertia_gamma)
-
-
-def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
-    """The shell with the fast fluid about the mean voltages' equilibrium; a step without a
-    finite answer (a singular or indefinite tangent) raises SweepError naming the step.
-    ``model``: the case's shell with its fast fluid, when already built."""
-    from solid_adapter.build import (
-        mean_voltage_equilibrium,
-        mean_voltage_modal_sweep,
-        static_loads,
-    )
-    from solid_adapter.piezo import DriveSignal
-
-    case = without_cfd(case)
-    if model is None:
-        model, _ = shell_with_fast_fluid(case)
-    drive0 = DriveSignal.from_case(case)
-    x_static = mean_voltage_equilibrium(case, model, drive0, static_loads(case, model))
-    if not np.all(np.isfinite(x_static)):
-        raise SweepError(
-            "linear sweep, static step: the equilibrium under the mean voltages is not finite"
-        )
-    with np.errstate(divide="ignore", invalid="ignore"):  # checked below, in one line
-        sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES)
-    check_modal_sweep(sweep)
-    tip = model.mesh.nearest_node(*model.layout.tip_point)
-    return LinearModel(case=case, model=model, x_static=x_static, sweep=sweep, tip=tip)
-
-
-def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
-    actuation = dataclasses.replace(case.actuation, frequency_hz=frequency_hz, waveform=waveform)
-    return dataclasses.replace(case, actuation=actuation)
 
 
 def linear_sweep(
@@ -230,27 +130,6 @@ def linear_sweep(
 
 # a tail amplitude past this fraction of the plate's length is outside the linear model
 LINEAR_RANGE = 0.2
-
-
-def check_modal_sweep(sweep) -> None:
-    """The modal superposition needs every wet mode at a positive, finite frequency and a
-    finite static correction: a singular or indefinite tangent (a mechanism, or a plate
-    buckled by the mean voltages) has none."""
-    omegas = np.asarray(sweep.omegas)
-    bad = np.flatnonzero(~(np.isfinite(omegas) & (omegas > 0)))
-    if bad.size:
-        j = int(bad[0])
-        raise SweepError(
-            f"linear sweep, modal step: the tangent about the mean-voltage equilibrium is "
-            f"singular or indefinite (wet mode {j + 1} at {omegas[j] / (2 * np.pi):.3g} Hz: a "
-            "mechanism, or a plate buckled by the mean voltages), so the linear response has "
-            "no finite answer; check the case with fsi-modal, or use --method transient"
-        )
-    if not (np.all(np.isfinite(sweep.static)) and np.all(np.isfinite(sweep.zetas))):
-        raise SweepError(
-            "linear sweep, static-correction step: K^-1 F about the mean-voltage equilibrium "
-            "is not finite (a singular tangent); check the case with fsi-modal"
-        )
 
 
 def not_finite_status(row: dict, keys: Sequence[str], step: str = "linear response") -> str:

@@ -8,7 +8,7 @@ import time
 from collections.abc import Sequence
 
 from .common import EXIT_OK, base_parser, emit, load, run_main
-from .compose import shell_with_fast_fluid, without_cfd
+from .fast_model import shell_with_fast_fluid, without_cfd
 from .progress import RunProgress
 
 

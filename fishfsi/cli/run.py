@@ -41,9 +41,9 @@ from .compose import (
     learned_jacobian_path,
     openfoam_fluid_factory,
     recorded_start,
-    shell_with_fast_fluid,
     start_from_path,
 )
+from .fast_model import shell_with_fast_fluid
 from .linear import swimming_summary
 from .modal import modal_summary
 from .outputs import check_finite, label_results, prepare_output, refuse_unwritable

@@ -68,15 +68,8 @@ from .common import (
     plural,
     run_main,
 )
-from .compose import without_cfd
-from .linear import (
-    OnRow,
-    SweepError,
-    linear_sweep,
-    not_finite_status,
-    point_name,
-    with_drive,
-)
+from .fast_model import SweepError, with_drive, without_cfd
+from .linear import OnRow, linear_sweep, not_finite_status, point_name
 from .swimming import SWIMMING_KEYS
 
 ROWS_FOLDER = "sweep_rows"  # one finished point's row per file

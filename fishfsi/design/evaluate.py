@@ -236,7 +236,7 @@ def mesh_name(case: Case) -> str:
 
 
 def _sweep_modes() -> int:
-    from ..cli.linear import MODES
+    from ..cli.fast_model import MODES
 
     return MODES
 
@@ -249,7 +249,7 @@ def _samples() -> int:
 
 def linear_figures(case: Case) -> dict:
     """fsi-sweep --method linear's row at the case's own drive, under fsi-run's keys."""
-    from ..cli.compose import without_cfd
+    from ..cli.fast_model import without_cfd
     from ..cli.linear import linear_sweep
 
     case = without_cfd(case)
