@@ -310,3 +310,15 @@ def test_pimple_settings_do_not_regenerate_the_fluid_folder(tmp_path):
     assert fingerprint(case, 1.0, 1) == stamped
     denser = case_from_dict({"fluid": {"model": "openfoam", "density_kg_m3": 1000.0}}, tmp_path)
     assert fingerprint(denser, 1.0, 1) != stamped
+
+
+def test_a_static_run_needs_no_room_for_a_liquid_it_never_meets(tmp_path, capsys):
+    """A static solve of the 10 m plate with the potential model set runs; its wet modes need
+    a sphere of 11 m, beyond the key's 2 m, and the line says to use the tank."""
+    case = str(ROOT / "cases" / "rectangle_tip_force")
+    sets = ["--set", "fluid.model=potential"]
+    assert run_cli.main([case, *sets, "--json", "--quiet", "--output", str(tmp_path)]) == 0
+    capsys.readouterr()
+    assert modal_cli.main([case, *sets, "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "fluid.domain_diameter_m (0.2 m)" in err and 'fluid.domain = "tank"' in err

@@ -108,3 +108,42 @@ def test_rigid_disk_added_mass_is_8_thirds_rho_a_cubed():
 
     m = added_mass(fluid, rigid, rho)
     assert m.total() == pytest.approx(8 / 3 * rho * a**3, rel=0.03)
+
+
+def test_the_commands_own_sigterm_handler_holds_while_gmsh_meshes(monkeypatch):
+    """gmsh's initialize resets SIGTERM to the C default: a scheduler's time limit during the
+    meshing would kill the command without a word. The Python handler is put back at once,
+    so a SIGTERM there is handled when gmsh returns."""
+    import signal
+
+    import gmsh
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    def caught() -> bool:  # the kernel's view: Python's getsignal() does not see gmsh's reset
+        status = Path("/proc/self/status").read_text().splitlines()
+        mask = int(next(line for line in status if line.startswith("SigCgt")).split()[1], 16)
+        return bool(mask >> (signal.SIGTERM - 1) & 1)
+
+    seen = []
+    generate = gmsh.model.mesh.generate
+
+    def watched(dim):
+        seen.append(caught())
+        return generate(dim)
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    monkeypatch.setattr(gmsh.model.mesh, "generate", watched)
+    try:
+        a = 0.05
+        theta = np.linspace(0, 2 * np.pi, 16, endpoint=False)
+        build_fluid_mesh(
+            np.column_stack([a * np.cos(theta), a * np.sin(theta)]),
+            SphereDomain(centre=(0, 0, 0), radius_m=4 * a),
+            MeshSizes(near_plate_m=0.5 * a, far_m=2 * a, growth_distance_m=2 * a, edge_m=0.3 * a),
+        )
+        assert seen == [True]
+        assert caught() and signal.getsignal(signal.SIGTERM) is handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)

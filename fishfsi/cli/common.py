@@ -76,14 +76,16 @@ def add_version(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--version", action=_Version)
 
 
-def load(args: argparse.Namespace) -> Case:
+def load(args: argparse.Namespace, static: bool | None = None) -> Case:
     """The validated case of a command: an empty case.toml is refused, and so is a plate that
-    does not fit its clamp or its fluid domain (one line, exit 2, before any solver runs)."""
+    does not fit its clamp or its fluid domain (one line, exit 2, before any solver runs).
+    ``static``: whether the command meets no liquid (default: the case's analysis is static;
+    fsi-modal's wet modes meet it whatever the case's kind)."""
     from fsi_orchestrator.case.loader import blame_override
 
     case = load_case(args.case, args.overrides, allow_empty=False)
     try:
-        check_plausible(case)
+        check_plausible(case, static)
     except CaseError as err:  # a check across keys may follow from a --set
         given = list(args.overrides or ())
         raise CaseError(blame_override(str(err), given, derived=True)) from None
@@ -94,10 +96,11 @@ def load(args: argparse.Namespace) -> Case:
 DOMAIN_MARGIN = 0.05
 
 
-def check_plausible(case: Case) -> None:
+def check_plausible(case: Case, static: bool | None = None) -> None:
     """Checks across keys that need the resolved plate (a preset's body length): the clamp
-    leaves part of the plate free, the tank or sphere holds the plate with a margin."""
-    from fsi_orchestrator.case.schema import FluidDomain, FluidModel
+    leaves part of the plate free, the tank or sphere holds the plate with a margin (unless
+    ``static``, a solve that meets no liquid; default: the case's analysis is static)."""
+    from fsi_orchestrator.case.schema import AnalysisKind, FluidDomain, FluidModel, key_spec
     from solid_adapter.geometry import build_layout  # the composition root may know adapters
 
     layout = build_layout(case)  # raises CaseError naming the key when the outline is wrong
@@ -108,14 +111,26 @@ def check_plausible(case: Case) -> None:
             f"the plate ({length:g} m), or nothing is free to move"
         )
     f = case.fluid
+    if static is None:
+        static = case.analysis.kind is AnalysisKind.STATIC
+    if static:  # a static solve meets no liquid
+        return
     margin = DOMAIN_MARGIN * length
     height = float(np.max(layout.height(np.linspace(0.0, length, 201))))
     if f.model is FluidModel.POTENTIAL and f.domain is FluidDomain.SPHERE:
         reach = float(np.hypot(length / 2, height / 2))  # centre to the farthest corner
         if f.domain_diameter_m / 2 < reach + margin:
+            needed = 2 * (reach + margin)
+            largest = key_spec("fluid.domain_diameter_m").le
+            beyond = (
+                f' (beyond the sphere\'s {largest:g} m: use fluid.domain = "tank" with its '
+                "size keys)"
+                if largest is not None and needed > largest
+                else ""
+            )
             raise CaseError(
                 f"case.toml: fluid.domain_diameter_m ({f.domain_diameter_m:g} m) must hold the "
-                f"{length:g} m plate with a margin: at least {2 * (reach + margin):.3g} m"
+                f"{length:g} m plate with a margin: at least {needed:.3g} m{beyond}"
             )
     elif f.model is FluidModel.OPENFOAM or (
         f.model is FluidModel.POTENTIAL and f.domain is FluidDomain.TANK

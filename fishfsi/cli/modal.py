@@ -55,7 +55,7 @@ def modal_summary(case, progress: RunProgress | None = None) -> dict:
 
 
 def _body(args: argparse.Namespace) -> int:
-    emit(modal_summary(load(args), RunProgress(enabled=not args.quiet)), args.json)
+    emit(modal_summary(load(args, static=False), RunProgress(enabled=not args.quiet)), args.json)
     return EXIT_OK
 
 

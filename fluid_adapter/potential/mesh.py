@@ -85,11 +85,13 @@ def _restore(handlers: dict) -> None:
 def build_fluid_mesh(
     polygon: NDArray, domain: SphereDomain | BoxDomain, sizes: MeshSizes
 ) -> FluidMesh:
-    # gmsh's finalize leaves SIGINT and SIGTERM at their C defaults, and a SIGTERM (SLURM's
-    # time limit) then killed the command without a word: the Python handlers are put back
+    # gmsh's initialize and finalize leave SIGINT and SIGTERM at their C defaults, and a
+    # SIGTERM (SLURM's time limit) then killed the command without a word: the Python
+    # handlers are put back after each (one that arrives while gmsh meshes acts when it returns)
     handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
         gmsh.initialize(interruptible=False)
+        _restore(handlers)
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("fluid")
         plate = _geometry(polygon, domain)
