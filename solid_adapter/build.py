@@ -281,10 +281,17 @@ def periodic_orbit(
     fluid force the inertia does not hold (see ModalCorrection)."""
     x_static = mean_voltage_equilibrium(case, model, drive, loads)
     damping_model = integrator.damping
+    eliminated: dict = {}  # each harmonic's operator, kept while only the drag changes
 
     def solve(damping):
         return periodic_response(
-            model, drive, x_static, damping, resolved_harmonics(case), correction=correction
+            model,
+            drive,
+            x_static,
+            damping,
+            resolved_harmonics(case),
+            correction=correction,
+            cache=eliminated,
         )
 
     if damping_model is None or not damping_model.amplitude_dependent:

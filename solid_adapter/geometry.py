@@ -74,6 +74,16 @@ class PlateLayout:
     # elastic head support: nodes with x <= support_x_m rest on springs (total N/m)
     support_x_m: float | None = None
     support_stiffness_n_per_m: float = 0.0
+    # hinge (the thrust rig's stick): the nodes on the line x = pin_x_m are held in
+    # translation and free to turn, one rigid mode (yaw about the line) left
+    pin_x_m: float | None = None
+
+    @property
+    def rigid_modes(self) -> int:
+        """Rigid-body modes the supports leave: 6 for a free plate, 1 on a hinge."""
+        if self.pin_x_m is not None:
+            return 1
+        return 6 if self.clamp_x_m is None and self.support_x_m is None else 0
 
     def height(self, x: NDArray) -> NDArray:
         return self.height_fn(x)  # type: ignore[operator]
@@ -115,6 +125,7 @@ def _fish_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
         sections.append(Section.from_layers(stack(core, p.thickness_m, outer), piezo))
 
     clamp = _clamp_x(case, default=weight.xc + weight.radius)
+    pin = _pin_x(case, p.body_length_m)
     breaks = {
         0.0,
         p.body_length_m,
@@ -127,8 +138,7 @@ def _fish_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
         p.peduncle_x_m,
         weight.xc + weight.radius,
     }
-    if clamp is not None:
-        breaks.add(clamp)
+    breaks |= {x for x in (clamp, pin) if x is not None}
     mass = STEEL_HEAD_WEIGHT.density_kg_m3 * np.pi * weight.radius**2 * tw
     return PlateLayout(
         kind=GeometryKind.FISH,
@@ -142,6 +152,7 @@ def _fish_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
             (package.half_width, package.x0, package.x1),
         ),
         clamp_x_m=clamp,
+        pin_x_m=pin,
         head_weight_mass_kg=float(mass),
         description=f"fish preset {case.geometry.preset.value}",
     )
@@ -178,10 +189,11 @@ def _beam_layout(case: Case, piezo: PiezoConstants) -> PlateLayout:
         kind=GeometryKind.BEAM,
         length_m=L,
         height_fn=lambda x: np.full(np.shape(x), W),
-        breakpoints_m=tuple(sorted({0.0, L, mfc.x0, min(mfc.x1, L)})),
+        breakpoints_m=tuple(sorted({0.0, L, mfc.x0, min(mfc.x1, L), _pin_x(case, L) or 0.0})),
         sections=tuple(sections),
         region_rules=(("actuator", mfc),),
         clamp_x_m=_clamp_x(case, default=0.0),
+        pin_x_m=_pin_x(case, L),
         y_breaks=((mfc.half_width, mfc.x0, mfc.x1),) if mfc.half_width < W / 2 else (),
         description="seed beam model (Table 3.2)",
     )
@@ -200,10 +212,11 @@ def _rectangle_layout(case: Case) -> PlateLayout:
         kind=GeometryKind.RECTANGLE,
         length_m=g.length_m,
         height_fn=lambda x: np.full(np.shape(x), W),
-        breakpoints_m=(0.0, g.length_m),
+        breakpoints_m=tuple(sorted({0.0, g.length_m, _pin_x(case, g.length_m) or 0.0})),
         sections=(section,),
         region_rules=(),
         clamp_x_m=_clamp_x(case, default=0.0),
+        pin_x_m=_pin_x(case, g.length_m),
         description="isotropic rectangle",
     )
 
@@ -253,3 +266,13 @@ def build_layout(case: Case) -> PlateLayout:
             support_stiffness_n_per_m=case.boundary.support_stiffness_n_per_m,
         )
     return layout
+
+
+def _pin_x(case: Case, length: float) -> float | None:
+    if case.boundary.head is not HeadCondition.PINNED:
+        return None
+    pin = case.boundary.pin_x_m
+    check(
+        pin < length, "boundary.pin_x_m", f"({pin:g} m) must lie ahead of the tail at {length:g} m"
+    )
+    return pin

@@ -148,6 +148,9 @@ class ShellModel:
         )
         fixed = np.zeros(self.ndof, dtype=bool)
         fixed[(self.fixed_nodes[:, None] * NDOF + np.arange(NDOF)).ravel()] = True
+        if layout.pin_x_m is not None:  # a hinge: the line's translations, not its turning
+            pinned = np.flatnonzero(np.abs(mesh.nodes[:, 0] - layout.pin_x_m) <= 1e-9)
+            fixed[(pinned[:, None] * NDOF + np.arange(3)).ravel()] = True
         self.fixed_dofs = fixed
         self.free_dofs = ~fixed
         self.reference_points = np.column_stack([mesh.nodes, np.zeros(self.n_nodes)])

@@ -341,10 +341,15 @@ def static_free_dofs(model: ShellModel) -> NDArray:
     statically determinate support holds them - all DOFs of the node nearest the plate's
     first tenth on the centre line and u_y of a second centre-line node behind it. The
     piezo load is internal and self-equilibrated, so the support carries no reaction and
-    the deformation is the free plate's (up to a rigid motion)."""
+    the deformation is the free plate's (up to a rigid motion). A plate on a hinge turns
+    freely about it: u_z of the tail's centre node holds that turn, reaction-free alike."""
+    length = model.layout.length_m
+    if model.layout.pin_x_m is not None:
+        free = model.free_dofs.copy()
+        free[model.mesh.nearest_node(length, 0.0) * NDOF + 2] = False
+        return free
     if model.fixed_dofs.any() or model.support is not None:
         return model.free_dofs
-    length = model.layout.length_m
     first = model.mesh.nearest_node(0.1 * length, 0.0)
     second = model.mesh.nearest_node(0.5 * length, 0.0)
     free = model.free_dofs.copy()
@@ -999,7 +1004,7 @@ def modal_analysis(
     K = stiffness if stiffness is not None else model.internal(model.zero_state(), np.zeros(2))[1]
     M = mass if mass is not None else model.inertia
     free = model.free_dofs
-    rigid = 6 if model.layout.clamp_x_m is None and model.support is None else 0
+    rigid = model.layout.rigid_modes
     Kff, Mff = sp.csc_matrix(K[free][:, free]), sp.csc_matrix(M[free][:, free])
     k = num_modes + rigid
     # a fixed start vector: the same modes to the last digit from run to run

@@ -123,6 +123,19 @@ CASES = {
         "[loads]\npressure_pa = 10\n",
         "loads.pressure_pa",
     ),
+    "plate on a hinge under a tip force": (
+        RECTANGLE
+        + "poisson_ratio = 0.3\n"
+        + '[analysis]\nkind = "static"\n[boundary]\nhead = "pinned"\n'
+        "[loads]\ntip_force_n = 1\n",
+        "loads.tip_force_n",
+        "hinge",
+    ),
+    "hinge behind the tail": (
+        '[boundary]\nhead = "pinned"\npin_x_m = 0.5\n',
+        "boundary.pin_x_m",
+        "ahead of the tail",
+    ),
     "head weight behind the tail": (
         "[geometry]\nhead_weight_x_m = 0.5\n",
         "geometry.head_weight_x_m",

@@ -8,7 +8,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
+from fsi_orchestrator.case.loader import load_case
 from fsi_orchestrator.start_orbit import LeadInSamples, fit_modal_force
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,7 +47,6 @@ def test_start_correction_puts_the_shell_on_the_liquids_orbit():
     from fishfsi.cli.compose import added_mass_for_preconditioning, coupled_setup
     from fluid_adapter.potential.model import AddedMass
     from fluid_adapter.potential.participant import PotentialParticipant
-    from fsi_orchestrator.case.loader import load_case
     from fsi_orchestrator.coupling import Coupling
     from solid_adapter.build import CorrectableStart, periodic_orbit, static_loads
     from solid_adapter.piezo import DriveSignal
@@ -272,3 +273,41 @@ def test_a_lead_in_that_turns_the_plate_past_the_mesh_motion_starts_from_rest():
     assert free.actuation.ramp_periods == 1
     as_given, note = start("cases/fixed_head_3Hz", [])
     assert note is None and as_given.actuation.ramp_periods == 0
+
+
+def test_the_normal_dofs_elimination_solves_the_harmonics_exactly_and_is_kept_for_the_drag(
+    monkeypatch,
+):
+    """The fish in potential flow (the added mass fills the normal block): each harmonic of
+    the square wave solved by elimination onto the normal DOFs equals the plain sparse LU's;
+    a second call whose damping differs on the normal diagonal only (the edge drag's fixed
+    point) keeps each harmonic's elimination and refactors its dense block, and a damping
+    that reaches the other DOFs builds it anew."""
+    from fishfsi.cli.fast_model import shell_with_fast_fluid
+    from solid_adapter import harmonic
+    from solid_adapter.piezo import DriveSignal
+
+    case = load_case(
+        ROOT / "cases/seed/thrust_rig",
+        ["fluid.model=potential", "mesh.level=coarse", "actuation.frequency_hz=12"],
+    )
+    model, _ = shell_with_fast_fluid(case)
+    drive = DriveSignal.from_case(case)
+    x0 = model.zero_state()
+    n = model.ndof
+    normal = np.arange(n) % 5 == 2
+    drag = sp.diags(np.where(normal, 0.3, 0.0)).tocsr()
+    cache: dict = {}
+    fast = harmonic.periodic_response(model, drive, x0, drag, 3, cache=cache)
+    assert len(cache) == 3
+    kept = dict(cache)
+    harmonic.periodic_response(model, drive, x0, 2.0 * drag, 3, cache=cache)
+    assert all(cache[key] is kept[key] for key in kept)
+    structural = sp.diags(np.full(n, 1e-3)).tocsr()
+    harmonic.periodic_response(model, drive, x0, drag + structural, 3, cache=cache)
+    assert all(cache[key] is not kept[key] for key in kept)
+    monkeypatch.setattr(harmonic, "DENSE_NORMAL_BLOCK", float("inf"))
+    plain = harmonic.periodic_response(model, drive, x0, drag, 3)
+    for (k, X), (k2, Y) in zip(fast.harmonics, plain.harmonics, strict=True):
+        assert k == k2
+        np.testing.assert_allclose(X, Y, rtol=0, atol=1e-7 * np.abs(Y).max())  # round-off

@@ -173,6 +173,7 @@ def test_the_seeds_right_turn_rate_within_a_factor_1_5(original_runs):
         ("swimming.head_weight_drag_coefficient=inf", "swimming.head_weight_drag_coefficient"),
         ("swimming.crossflow_drag_coefficient=-0.5", "swimming.crossflow_drag_coefficient"),
         ("boundary.head=clamped", "boundary.head"),
+        ("boundary.head=pinned", "boundary.head"),
         ("fluid.model=none", "fluid.model"),
         ("fluid.density_kg_m3=25", "swimming.float_density_kg_m3"),  # no float can rise
     ],

@@ -226,10 +226,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 raise CaseError(f'material.{key} is required for geometry.kind = "rectangle"')
         if case.material.cfrp is not None:
             raise CaseError('material.cfrp does not apply to geometry.kind = "rectangle"')
-    if g.kind is not GeometryKind.FISH and case.boundary.head.value == "elastic":
+    head = case.boundary.head.value
+    if g.kind is not GeometryKind.FISH and head == "elastic":
         raise CaseError(
             f'boundary.head = "elastic" is the fish\'s head on springs; for geometry.kind = '
-            f'"{g.kind}" use "clamped" or "free" (the x = 0 edge)'
+            f'"{g.kind}" use "clamped", "free" (the x = 0 edge) or "pinned"'
         )
     a = case.actuation
     lo, hi = MFC_VOLTAGE_RANGE_V
@@ -242,15 +243,16 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
                 f"actuation.{key} must lie within the MFC's range [{lo:g}, {hi:g}] V "
                 f"(Table 3.1), got {list(volts)}"
             )
-    if case.analysis.kind.value == "static" and case.boundary.head.value == "free":
+    if case.analysis.kind.value == "static" and head in ("free", "pinned"):
         outside = [
             f"loads.{key}"
             for key in ("tip_force_n", "tip_moment_nm", "pressure_pa")
             if getattr(case.loads, key) != 0
         ]
         if outside:
+            plate = "a free plate" if head == "free" else "a plate on a hinge"
             raise CaseError(
-                f'{", ".join(outside)} on a free plate (boundary.head = "free"): nothing '
+                f'{", ".join(outside)} on {plate} (boundary.head = "{head}"): nothing '
                 "holds the plate against an outside load, so it has no static equilibrium; "
                 'clamp it (boundary.head = "clamped") or run analysis.kind = "dynamic"'
             )
@@ -259,11 +261,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
             raise CaseError(
                 f'analysis.kind = "swimming" needs geometry.kind = "fish", got "{g.kind}"'
             )
-        if case.boundary.head.value == "clamped":
+        if head in ("clamped", "pinned"):
             raise CaseError(
                 'analysis.kind = "swimming" needs boundary.head = "free" (a swimming fish is '
                 'held nowhere) or "elastic" (its head on springs, a sensitivity study of what '
-                'might restrain it), got "clamped"'
+                f'might restrain it), got "{head}"'
             )
         if case.fluid.model.value == "none":
             raise CaseError(

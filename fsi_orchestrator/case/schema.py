@@ -42,7 +42,8 @@ class CfrpProperties(StrEnum):
 class HeadCondition(StrEnum):
     CLAMPED = "clamped"
     FREE = "free"
-    ELASTIC = "elastic"  # held by springs over the clamp region (the thrust rig's stick)
+    ELASTIC = "elastic"  # held by springs over the clamp region
+    PINNED = "pinned"  # a hinge about the vertical line x = pin_x_m (the thrust rig's stick)
 
 
 class AnalysisKind(StrEnum):
@@ -444,15 +445,24 @@ class Boundary:
         HeadCondition.CLAMPED,
         'fish: head clamped ("fixed head"), '
         "free (free-free modes; a free body in dynamic runs, its static "
-        "start held by a reaction-free support) or elastic (the nodes a clamp would hold rest "
-        "on springs of boundary.support_stiffness_n_per_m in all three directions, like the "
-        "head on the thrust rig's stick, Sec. 4.3.1); rectangle/beam: x = 0 edge "
-        "clamped or free.",
+        "start held by a reaction-free support), elastic (the nodes a clamp would hold rest "
+        "on springs of boundary.support_stiffness_n_per_m in all three directions) or pinned "
+        "(the vertical line x = boundary.pin_x_m held in place and free to turn about "
+        "itself, as the point contact of the thrust rig's stick holds the head, Sec. 4.3.1); "
+        "rectangle/beam: x = 0 edge clamped or free, or pinned at boundary.pin_x_m.",
     )
     clamp_length_m: float | None = param(
         None,
         "fish: nodes with x <= this are clamped (default: "
         "the head weight's rear edge); rectangle/beam: 0.",
+        unit="m",
+        ge=0,
+        le=100,
+    )
+    pin_x_m: float = param(
+        0.0,
+        'boundary.head = "pinned": where along the plate the hinge line stands (0: the nose, '
+        "where the rig's stick touches the head).",
         unit="m",
         ge=0,
         le=100,
