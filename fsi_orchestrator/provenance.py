@@ -112,15 +112,28 @@ def case_identity(case: Case) -> str:
     return json.dumps(identity, sort_keys=True)
 
 
+def is_new_default(section: str, key: str, value: Any) -> bool:
+    """Whether ``section.key`` at ``value`` is its default: a key added to the schema after an
+    identity was stored, at its default, changes nothing that identity stood for."""
+    fields = {f.name: f for f in dataclasses.fields(Case)}
+    spec = fields.get(section)
+    if spec is None or spec.default_factory is dataclasses.MISSING:
+        return False
+    default = _plain(dataclasses.asdict(spec.default_factory()))
+    return key in default and default[key] == value
+
+
 def identity_changes(stored: str, current: str, limit: int = 3) -> list[str]:
     """``section.key`` of the first few keys that differ between two identities, over the
-    sections the stored one holds (older checkpoints hold no fluid model)."""
+    sections the stored one holds (older checkpoints hold no fluid model); a key the stored
+    one lacks counts only away from its default."""
     a, b = json.loads(stored), json.loads(current)
     keys = sorted(
         f"{s}.{k}"
         for s in set(a)
         for k in set(a[s]) | set(b.get(s, {}))
         if a[s].get(k) != b.get(s, {}).get(k)
+        and not (k not in a[s] and is_new_default(s, k, b.get(s, {}).get(k)))
     )
     return keys[:limit]
 

@@ -149,7 +149,11 @@ class ShellModel:
         fixed = np.zeros(self.ndof, dtype=bool)
         fixed[(self.fixed_nodes[:, None] * NDOF + np.arange(NDOF)).ravel()] = True
         if layout.pin_x_m is not None:  # a hinge: the line's translations, not its turning
-            pinned = np.flatnonzero(np.abs(mesh.nodes[:, 0] - layout.pin_x_m) <= 1e-9)
+            pinned = np.flatnonzero(
+                np.abs(mesh.nodes[:, 0] - layout.pin_x_m) <= 1e-9 * max(layout.length_m, 1.0)
+            )
+            if len(pinned) < 2:  # the mesh puts a column of nodes on every breakpoint
+                raise ValueError(f"no column of shell nodes on the hinge x = {layout.pin_x_m} m")
             fixed[(pinned[:, None] * NDOF + np.arange(3)).ravel()] = True
         self.fixed_dofs = fixed
         self.free_dofs = ~fixed

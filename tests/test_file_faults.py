@@ -650,3 +650,20 @@ def test_a_failed_atomic_write_leaves_no_temporary_file_and_names_the_target(tmp
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
     assert caught.value.filename == str(tmp_path / "b.json")
     assert [p.name for p in tmp_path.iterdir()] == ["sine_5Hz.json"]
+
+
+def test_a_checkpoint_written_before_a_key_existed_resumes_while_the_key_is_at_its_default():
+    """A checkpoint's case identity holds the keys of its day. A key added later (here
+    boundary.pin_x_m), at its default, changes nothing the checkpoint stood for; away from
+    its default it does, and so does any key the checkpoint holds."""
+    from fsi_orchestrator.provenance import case_identity, identity_changes
+
+    case = load_case(ROOT / "cases" / "fixed_head_3Hz")
+    current = case_identity(case)
+    older = json.loads(current)
+    del older["boundary"]["pin_x_m"]
+    assert identity_changes(json.dumps(older), current) == []
+    pinned = load_case(ROOT / "cases" / "fixed_head_3Hz", ["boundary.pin_x_m=0.01"])
+    assert identity_changes(json.dumps(older), case_identity(pinned)) == ["boundary.pin_x_m"]
+    clamp = load_case(ROOT / "cases" / "fixed_head_3Hz", ["boundary.clamp_length_m=0.02"])
+    assert identity_changes(json.dumps(older), case_identity(clamp)) == ["boundary.clamp_length_m"]
