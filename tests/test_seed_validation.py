@@ -93,6 +93,24 @@ def test_thrust_peaks_where_the_rig_measured_it(thrust_curve):
     assert 15 <= peak <= 20
 
 
+def test_the_hinged_fast_thrust_follows_openfoams_on_the_same_rig(fast):
+    """OpenFOAM coupled on the hinged rig (coarse level, square wave; its highest point is
+    16 Hz, benchmarks/data/openfoam_hinged_rig_coarse.toml): the fast thrust within 25 % of it
+    at 12, 16 and 20 Hz (measured: -19 / -14 / +12 %) and highest at 16 Hz of the three."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "benchmarks/data/openfoam_hinged_rig_coarse.toml").read_text())[
+        "square"
+    ]
+    fast_thrust = {}
+    for f, cfd in zip(data["frequency_hz"], data["thrust_mn"], strict=True):
+        fast_thrust[f] = fast.orbit(_frozen("thrust_rig", f"actuation.frequency_hz={f}"))[
+            "thrust_n"
+        ]
+        assert 1e3 * fast_thrust[f] == pytest.approx(cfd, rel=0.25)
+    assert max(fast_thrust, key=fast_thrust.get) == 16
+
+
 def test_the_clamped_head_puts_the_thrust_peak_elsewhere(fast):
     """The support decides where the curve peaks: clamped as in the seed's FSI (Sec. 3.5.2),
     the fish's second wet bending mode rings at 25 Hz and the thrust at 18 Hz is under a
@@ -129,7 +147,9 @@ def test_the_thrust_curve_is_finite_and_positive_and_the_harmonics_are_damped(fa
     assert every < 0.5 * fundamental.orbit(drag_alone)["thrust_n"]
 
 
-@pytest.mark.xfail(strict=True, reason="fast thrust at the peak 0.71 N, rig <= 0.107 N")
+@pytest.mark.xfail(
+    strict=True, reason="hinged: fast thrust at the peak 0.71 N, OpenFOAM 0.81 N; rig <= 0.107 N"
+)
 def test_peak_thrust_within_what_the_rig_could_read(thrust_curve):
     """Sec. 4.3.1: 0.5 N load cell x 45 / 210 mm lever = 0.107 N at most."""
     assert max(thrust_curve.values()) <= 0.107
