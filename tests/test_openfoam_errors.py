@@ -265,3 +265,29 @@ def test_face_centres_are_openfoams_area_centroids_on_tapered_faces(tmp_path):
     np.testing.assert_allclose(centres[:, 2], 0.5 * x_exact, rtol=0, atol=1e-15)
     assert np.abs(strip[faces].mean(axis=1)[:, 0] - x_exact).max() > 1.2e-3
     np.testing.assert_array_equal(face_order(centres, centres, tmp_path), np.arange(6))
+
+
+def test_a_lead_in_that_diverges_says_so_and_names_the_start_from_rest():
+    """The lead-in moves the liquid along the fast model's orbit before window 1; undamped near
+    a wet resonance that orbit can be far larger than the coupled motion (the hinged thrust
+    rig at 3 Hz: 27 mm, where the run from rest swings 13 mm), and pimpleFoam blew up in it
+    with the advice to shorten the time step. The error says where it diverged and that a
+    start from rest avoids it, with the solver's log lines still after the first line."""
+    from types import SimpleNamespace
+
+    from fluid_adapter.openfoam.errors import DivergenceError
+    from fluid_adapter.openfoam.participant import OpenFoamParticipant
+
+    class Diverging:
+        time = 0.0
+
+        def advance_prescribed(self, displacements, dt):
+            raise DivergenceError("pimpleFoam diverged in CASE: NaN; reduce the time step\nLOG")
+
+    run = SimpleNamespace(interface=SimpleNamespace(points0=np.zeros((4, 3))))
+    fluid = OpenFoamParticipant(run, Diverging(), dt=DT, n_windows=40)
+    with pytest.raises(DivergenceError) as caught:
+        fluid.follow([np.zeros((4, 3))], DT)
+    first, _, rest = str(caught.value).partition("\n")
+    assert "in the lead-in" in first and "time.start=rest" in first
+    assert rest == "LOG"

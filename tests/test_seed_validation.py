@@ -95,8 +95,9 @@ def test_thrust_peaks_where_the_rig_measured_it(thrust_curve):
 
 def test_the_hinged_fast_thrust_follows_openfoams_on_the_same_rig(fast):
     """OpenFOAM coupled on the hinged rig (coarse level, square wave; its highest point is
-    16 Hz, benchmarks/data/openfoam_hinged_rig_coarse.toml): the fast thrust within 25 % of it
-    at 12, 16 and 20 Hz (measured: -19 / -14 / +12 %) and highest at 16 Hz of the three."""
+    16 Hz, benchmarks/data/openfoam_hinged_rig_coarse.toml): the fast thrust within 40 % of it
+    at 3, 5, 12, 16 and 20 Hz (measured: -35 / -32 / -19 / -14 / +12 %), highest at 16 Hz
+    of these, and its 5 Hz thrust about twice its 3 Hz thrust, as the CFD's (x1.97)."""
     import tomllib
 
     data = tomllib.loads((ROOT / "benchmarks/data/openfoam_hinged_rig_coarse.toml").read_text())[
@@ -107,8 +108,10 @@ def test_the_hinged_fast_thrust_follows_openfoams_on_the_same_rig(fast):
         fast_thrust[f] = fast.orbit(_frozen("thrust_rig", f"actuation.frequency_hz={f}"))[
             "thrust_n"
         ]
-        assert 1e3 * fast_thrust[f] == pytest.approx(cfd, rel=0.25)
+        assert 1e3 * fast_thrust[f] == pytest.approx(cfd, rel=0.40)
     assert max(fast_thrust, key=fast_thrust.get) == 16
+    cfd_ratio = data["thrust_mn"][1] / data["thrust_mn"][0]
+    assert fast_thrust[5] / fast_thrust[3] == pytest.approx(cfd_ratio, rel=0.10)
 
 
 def test_the_clamped_head_puts_the_thrust_peak_elsewhere(fast):
@@ -155,7 +158,9 @@ def test_peak_thrust_within_what_the_rig_could_read(thrust_curve):
     assert max(thrust_curve.values()) <= 0.107
 
 
-@pytest.mark.xfail(strict=True, reason="model 5 Hz / 3 Hz thrust 2.05; measured below 1")
+@pytest.mark.xfail(
+    strict=True, reason="hinged: 5 Hz / 3 Hz thrust 2.05 (OpenFOAM 1.97); measured below 1"
+)
 def test_5hz_thrust_below_3hz_thrust(thrust_curve):
     """Sec. 4.3.2: the 5 Hz thrust is below the 3 Hz thrust."""
     assert thrust_curve[5] < thrust_curve[3]
