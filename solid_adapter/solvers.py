@@ -342,11 +342,12 @@ def static_free_dofs(model: ShellModel) -> NDArray:
     first tenth on the centre line and u_y of a second centre-line node behind it. The
     piezo load is internal and self-equilibrated, so the support carries no reaction and
     the deformation is the free plate's (up to a rigid motion). A plate on a hinge turns
-    freely about it: u_z of the tail's centre node holds that turn, reaction-free alike."""
+    freely about it: u_z of a centre-line node a tenth of the plate behind the hinge holds that
+    turn (hinge_gauge_node), reaction-free alike, so a static shape is seen from the hinge."""
     length = model.layout.length_m
     if model.layout.pin_x_m is not None:
         free = model.free_dofs.copy()
-        free[model.mesh.nearest_node(length, 0.0) * NDOF + 2] = False
+        free[hinge_gauge_node(model) * NDOF + 2] = False
         return free
     if model.fixed_dofs.any() or model.support is not None:
         return model.free_dofs
@@ -356,6 +357,15 @@ def static_free_dofs(model: ShellModel) -> NDArray:
     free[first * NDOF : (first + 1) * NDOF] = False
     free[second * NDOF + 1] = False
     return free
+
+
+def hinge_gauge_node(model: ShellModel) -> int:
+    """The centre-line node whose u_z holds a hinged plate's free turn in a static solve: a
+    tenth of the plate behind the hinge (ahead of it where the hinge is near the tail)."""
+    length, pin = model.layout.length_m, model.layout.pin_x_m
+    assert pin is not None
+    x = pin + 0.1 * length if pin + 0.1 * length <= length else pin - 0.1 * length
+    return model.mesh.nearest_node(x, 0.0)
 
 
 def solve_static(

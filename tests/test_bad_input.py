@@ -131,10 +131,15 @@ CASES = {
         "loads.tip_force_n",
         "hinge",
     ),
+    "hinge without a hinged head": (
+        "[boundary]\npin_x_m = 0.05\n",
+        "boundary.pin_x_m",
+        'boundary.head = "pinned"',
+    ),
     "hinge behind the tail": (
         '[boundary]\nhead = "pinned"\npin_x_m = 0.5\n',
         "boundary.pin_x_m",
-        "ahead of the tail",
+        "must lie on the plate",
     ),
     "head weight behind the tail": (
         "[geometry]\nhead_weight_x_m = 0.5\n",

@@ -663,7 +663,12 @@ def test_a_checkpoint_written_before_a_key_existed_resumes_while_the_key_is_at_i
     older = json.loads(current)
     del older["boundary"]["pin_x_m"]
     assert identity_changes(json.dumps(older), current) == []
-    pinned = load_case(ROOT / "cases" / "fixed_head_3Hz", ["boundary.pin_x_m=0.01"])
-    assert identity_changes(json.dumps(older), case_identity(pinned)) == ["boundary.pin_x_m"]
+    pinned = load_case(
+        ROOT / "cases" / "fixed_head_3Hz", ["boundary.head=pinned", "boundary.pin_x_m=0.01"]
+    )
+    assert identity_changes(json.dumps(older), case_identity(pinned)) == [
+        "boundary.head",
+        "boundary.pin_x_m",
+    ]
     clamp = load_case(ROOT / "cases" / "fixed_head_3Hz", ["boundary.clamp_length_m=0.02"])
     assert identity_changes(json.dumps(older), case_identity(clamp)) == ["boundary.clamp_length_m"]

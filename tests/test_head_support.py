@@ -7,7 +7,7 @@ import pytest
 
 from fsi_orchestrator.case.loader import load_case
 from solid_adapter.build import build_shell_model
-from solid_adapter.solvers import modal_analysis
+from solid_adapter.solvers import hinge_gauge_node, modal_analysis
 from tests.conftest import ROOT, rectangle
 
 
@@ -102,5 +102,36 @@ def test_the_hinge_holds_the_fish_in_place_but_carries_no_moment():
     assert np.abs(u[:, 2]).max() > 1e-4  # it bends
     volts = np.array([1000.0, 0.0])
     drive = np.abs(model.internal(model.zero_state(), volts, tangent=False)[0]).max()
-    tail = model.mesh.nearest_node(model.layout.length_m, 0.0) * 5 + 2
-    assert abs(model.internal(x, volts, tangent=False)[0][tail]) < 1e-6 * drive
+    gauge = hinge_gauge_node(model)
+    assert abs(model.internal(x, volts, tangent=False)[0][gauge * 5 + 2]) < 1e-6 * drive
+    # the static shape is seen from the hinge: a tenth of the plate behind it, the tail bends
+    assert abs(u[model.mesh.nearest_node(model.layout.length_m, 0.0), 2]) > 1e-3
+
+
+@pytest.mark.parametrize(
+    "pin, on",
+    [
+        (2e-9, 0.0),  # a sliver column beside the nose made fsi-modal take 75 s
+        (0.167 - 1e-8, 0.167),  # beside the tail: gmsh could not mesh the liquid
+        (0.167, 0.167),  # on the trailing edge: the fish turns about its tail
+        (0.05, 0.05),
+    ],
+)
+def test_a_hinge_stands_on_a_nearby_edge_of_the_mesh_and_holds_one_turn(pin, on):
+    """A hinge within a thousandth of the length of an edge the mesh has anyway (the nose,
+    the tail, the actuator's ends) stands on it; one rigid mode, and the static solve's
+    gauge node lies a tenth of the plate from it, on the plate."""
+    case = load_case(
+        ROOT / "cases" / "fixed_head_3Hz",
+        [
+            "fluid.model=none",
+            "mesh.level=coarse",
+            "boundary.head=pinned",
+            f"boundary.pin_x_m={pin!r}",
+        ],
+    )
+    model = build_shell_model(case)
+    assert model.layout.pin_x_m == pytest.approx(on, abs=1e-12)
+    assert modal_analysis(model, 1).rigid_modes == 1
+    gauge_x = model.mesh.nodes[hinge_gauge_node(model), 0]
+    assert abs(abs(gauge_x - on) - 0.1 * 0.167) < 0.01

@@ -119,6 +119,8 @@ def test_a_start_continues_a_run_whose_steps_damp_by_the_strain_rate(tmp_path, c
         ([], ["actuation.frequency_hz=12"], "driven at 10 Hz, this case at 12 Hz"),
         ([], ["mesh.level=default"], "shell meshes differ"),
         (["time.periods=2.5"], [], "not at the end of a whole recorded period"),
+        # held another way, the held nodes would stay where the first run left them
+        ([], ["boundary.head=pinned"], "held otherwise (boundary.head"),
     ],
 )
 def test_a_start_that_does_not_fit_is_refused_in_one_line(

@@ -589,3 +589,46 @@ def test_the_fast_models_keys_are_not_part_of_an_openfoam_sweeps_identity():
         ("edge_inertia_gamma", 1.17),
     ):
         assert key not in openfoam and linear[key] == value, key
+
+
+def test_a_run_whose_lead_in_diverges_runs_again_from_rest_and_resumes_so(
+    tmp_path, capsys, monkeypatch
+):
+    """The CFD blew up in the lead-in on the fast orbit (the hinged thrust rig at 3 Hz:
+    undamped, the orbit swings 27 mm where the coupled run swings 12 mm): the run starts
+    again from rest with a one-period voltage ramp and two more periods, says so in one note
+    and in its summary (a sweep's row: "started from rest"), and a --resume continues that
+    run, not the lead-in's."""
+    from fishfsi.cli import run as run_cli
+    from fluid_adapter.openfoam.errors import LeadInDivergenceError
+
+    calls, orbit_diverges = [], [True]
+
+    def fake(case, output, resume, show_progress, overrides=(), replaces_run=False):
+        calls.append((case.actuation.ramp_periods, case.time.periods, resume))
+        if case.actuation.ramp_periods == 0 and orbit_diverges[0]:
+            raise LeadInDivergenceError(
+                "pimpleFoam diverged in X: floating point exception (NaN); reduce the time "
+                "step It diverged in the lead-in\nlog lines"
+            )
+        return {"tip_amplitude_m": 0.01}
+
+    monkeypatch.setattr(run_cli, "_run_dynamic", fake)
+    case = load_case(ROOT / "cases/seed/thrust_rig", ["actuation.frequency_hz=3"])
+    out = tmp_path / "run"
+    out.mkdir()
+    summary = run_cli.run_dynamic(case, out, resume=False, show_progress=False)
+    assert calls == [(0.0, 2.0, False), (1.0, 4.0, False)]
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "lead-in" in err
+    assert "floating point exception (NaN)" in err and "4 periods in all (2 asked for)" in err
+    assert summary["start_from_rest"] == err.strip()
+    calls.clear()
+    resumed = run_cli.run_dynamic(case, out, resume=True, show_progress=False)
+    assert calls == [(1.0, 4.0, True)] and resumed["start_from_rest"] == err.strip()
+    assert (out / run_cli.FROM_REST_MARK).is_file()
+    calls.clear()
+    orbit_diverges[0] = False  # a fresh run tries the orbit again
+    fresh = run_cli.run_dynamic(case, out, resume=False, show_progress=False)
+    assert calls == [(0.0, 2.0, False)] and "start_from_rest" not in fresh
+    assert not (out / run_cli.FROM_REST_MARK).exists()

@@ -154,7 +154,7 @@ def start_flow(case: Case):
             case,
             "time.start_from",
             case.time.start_from,
-            lambda loop, _: float(loop["coupling"]["fluid"]["t"]),
+            lambda loop, _, __: float(loop["coupling"]["fluid"]["t"]),
             "OpenFOAM run's",
         )
     except CaseError as err:
@@ -172,8 +172,9 @@ def checkpoint_named(case: Case, named: str):
 
 
 def from_earlier_checkpoint(case: Case, key: str, named: str, pick, what: str):
-    """``pick(loop state, participants' states)`` of the checkpoint ``key`` names, or one
-    CaseError naming the key: no such file, or not a checkpoint holding ``what``."""
+    """``pick(loop state, participants' states, root attributes)`` of the checkpoint ``key``
+    names, or one CaseError naming the key: no such file, or not a checkpoint holding
+    ``what``."""
     from fsi_orchestrator.case import CaseError
     from fsi_orchestrator.results import CHECKPOINT_FILE, read_checkpoint
 
@@ -184,8 +185,8 @@ def from_earlier_checkpoint(case: Case, key: str, named: str, pick, what: str):
             f"{where} does not exist (give an earlier run's output folder or its {CHECKPOINT_FILE})"
         )
     try:
-        loop, participants, _ = read_checkpoint(path)
-        return pick(loop, participants)
+        loop, participants, attrs = read_checkpoint(path)
+        return pick(loop, participants, attrs)
     except (OSError, KeyError, ValueError, RuntimeError):  # ValueError: checksum, NaN
         raise CaseError(f"{where} holds no {what} checkpoint, or a damaged one") from None
 
@@ -199,15 +200,29 @@ def recorded_start(case: Case, ndof: int):
     """time.start_from: the orbit and end state that run recorded (None without the key),
     checked against this case's frequency and a shell of ``ndof`` unknowns."""
     from fsi_orchestrator.case import CaseError
+    from fsi_orchestrator.provenance import IDENTITY_ATTR, case_identity, identity_changes
     from solid_adapter.recorded_orbit import StartFromError
     from solid_adapter.recorded_orbit import recorded_start as start_on
 
     if not case.time.start_from:
         return None
     path = start_from_path(case)
-    shell = from_earlier_checkpoint(
-        case, "time.start_from", case.time.start_from, lambda _, p: p["shell"], "shell's"
+    shell, stored = from_earlier_checkpoint(
+        case,
+        "time.start_from",
+        case.time.start_from,
+        lambda _, p, attrs: (p["shell"], attrs.get(IDENTITY_ATTR)),
+        "shell's",
     )
+    # a run held another way ended with the nodes this case holds displaced: they would stay
+    # there, frozen (the state is carried over as it is)
+    changed = identity_changes(stored, case_identity(case), 99) if stored else []
+    held = [k for k in changed if k.startswith("boundary.")]
+    if held:
+        raise CaseError(
+            f"time.start_from: {path} was run with its plate held otherwise "
+            f"({', '.join(held)} changed): start from a run held as this case is"
+        )
     try:
         return start_on(path, shell, case.actuation.frequency_hz, ndof)
     except StartFromError as exc:
@@ -392,7 +407,7 @@ def learned_jacobian(case: Case, n_nodes: int) -> dict:
         case,
         "coupling.jacobian_from",
         case.coupling.jacobian_from,
-        lambda loop, _: loop["coupling"]["accelerator"],
+        lambda loop, _, __: loop["coupling"]["accelerator"],
         "coupled run's",
     )
     if "imvj_jacobian" not in state:

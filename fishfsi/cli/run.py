@@ -35,11 +35,13 @@ from .common import (
     run_main,
 )
 from .compose import (
+    RAMP_PERIODS,
     build_coupled_run,
     decide_start_flow,
     is_coupled,
     learned_jacobian_path,
     openfoam_fluid_factory,
+    ramped_start,
     recorded_start,
     start_from_path,
 )
@@ -265,7 +267,54 @@ def timed_factory(factory, progress: RunProgress):
     return build
 
 
+# in a run's folder: its lead-in on the fast orbit diverged and it runs from rest (a --resume
+# continues that run)
+FROM_REST_MARK = "started_from_rest.txt"
+
+
 def run_dynamic(
+    case: Case,
+    output: Path,
+    resume: bool,
+    show_progress: bool,
+    overrides: Sequence[str] = (),
+    replaces_run: bool = False,
+) -> dict:
+    """A transient run. Where the CFD blows up in the lead-in on the fast model's orbit
+    (undamped, it can swing the plate twice as far as the coupled run: the hinged thrust rig
+    at 3 Hz), the run starts again from rest with a voltage ramp, as choose_start starts one
+    whose orbit moves too fast, and says so."""
+    from fluid_adapter.openfoam.errors import LeadInDivergenceError
+
+    mark = output / FROM_REST_MARK
+    if not resume:
+        mark.unlink(missing_ok=True)
+    elif mark.is_file():
+        summary = _run_dynamic(ramped_start(case), output, resume, show_progress, overrides)
+        summary["start_from_rest"] = mark.read_text().strip()
+        return summary
+    try:
+        return _run_dynamic(case, output, resume, show_progress, overrides, replaces_run)
+    except LeadInDivergenceError as err:
+        if resume or case.actuation.ramp_periods > 0:
+            raise
+        ramped = ramped_start(case)
+        first = str(err).splitlines()[0]
+        reason = first.split(": ", 1)[-1].split(";")[0]
+        note = (
+            f"start: the CFD diverged in the lead-in on the fast model's periodic orbit "
+            f"({reason}); starting from rest instead, the voltage ramped up over "
+            f"{RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods in all "
+            f"({case.time.periods:g} asked for)"
+        )
+        print(note, file=sys.stderr)
+        atomic_write(mark, note + "\n")
+        summary = _run_dynamic(ramped, output, False, show_progress, overrides, True)
+        summary["start_from_rest"] = note
+        return summary
+
+
+def _run_dynamic(
     case: Case,
     output: Path,
     resume: bool,

@@ -8,6 +8,7 @@ from .build import build_openfoam_participant, case_schedule
 from .errors import (
     DivergenceError,
     DriverError,
+    LeadInDivergenceError,
     MeshFoldedError,
     MeshQualityError,
     OpenFoamError,
@@ -19,6 +20,7 @@ from .participant import OpenFoamParticipant
 __all__ = [
     "DivergenceError",
     "DriverError",
+    "LeadInDivergenceError",
     "MeshFoldedError",
     "MeshQualityError",
     "OpenFoamError",

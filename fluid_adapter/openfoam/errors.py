@@ -39,5 +39,10 @@ class DivergenceError(OpenFoamError):
     """The flow solution blew up: NaN, or residuals / Courant numbers beyond any sane bound."""
 
 
+class LeadInDivergenceError(DivergenceError):
+    """The flow blew up in the lead-in, the liquid alone following the fast model's orbit
+    before window 1: a start from rest may run where that orbit does not."""
+
+
 class DriverError(OpenFoamError, ParticipantSetupError):
     """A driver was asked for something it cannot do (e.g. going back in time while running)."""

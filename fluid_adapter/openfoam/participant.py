@@ -21,7 +21,7 @@ from fsi_orchestrator.participant import DISPLACEMENT, FORCE, InterfaceMesh, Sta
 
 from .checkmesh import MeshQuality, folded_mesh
 from .drivers import PersistentDriver, RelaunchDriver
-from .errors import DivergenceError, DriverError, MeshFoldedError
+from .errors import DivergenceError, DriverError, LeadInDivergenceError, MeshFoldedError
 from .flow_start import START_UP_WINDOWS, FlowSource, place
 from .foamrun import FoamRun
 from .loads import SurfaceLoads
@@ -188,7 +188,7 @@ class OpenFoamParticipant:
             # the lead-in follows the fast model's orbit, undamped near a wet resonance: the
             # hinged thrust rig's at 3 Hz (27 mm) blew up here and ran from rest (13 mm)
             first, _, rest = str(exc).partition("\n")
-            raise DivergenceError(
+            raise LeadInDivergenceError(
                 f"{first} It diverged in the lead-in, where the liquid follows the fast "
                 "model's periodic orbit before window 1: `--set time.start=rest` starts the "
                 "run from rest with a voltage ramp instead\n" + rest

@@ -227,6 +227,11 @@ def _cross_check(case: Case, raw: dict[str, Any]) -> None:
         if case.material.cfrp is not None:
             raise CaseError('material.cfrp does not apply to geometry.kind = "rectangle"')
     head = case.boundary.head.value
+    if head != "pinned" and case.boundary.pin_x_m != 0.0:
+        raise CaseError(
+            f'boundary.pin_x_m places a hinge, for boundary.head = "pinned" only (head is '
+            f'"{head}"); set boundary.head = "pinned" or leave boundary.pin_x_m out'
+        )
     if g.kind is not GeometryKind.FISH and head == "elastic":
         raise CaseError(
             f'boundary.head = "elastic" is the fish\'s head on springs; for geometry.kind = '

@@ -462,7 +462,9 @@ class Boundary:
     pin_x_m: float = param(
         0.0,
         'boundary.head = "pinned": where along the plate the hinge line stands (0: the nose, '
-        "where the rig's stick touches the head).",
+        "where the rig's stick touches the head; within 0.1 % of the length of an edge the "
+        "shell mesh has anyway, such as the tail or an actuator's end, it stands on that edge). "
+        "A static solve holds the free turn at a tenth of the length from it.",
         unit="m",
         ge=0,
         le=100,
