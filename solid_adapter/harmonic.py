@@ -101,10 +101,8 @@ class NormalElimination:
 
     def __init__(self, A: sp.spmatrix, normal: NDArray) -> None:
         A = sp.csr_matrix(A)
-        self.normal = normal
-        self.rest = np.flatnonzero(~normal)
-        z, r = np.flatnonzero(normal), self.rest
-        self.z = z
+        self.rest, self.z = np.flatnonzero(~normal), np.flatnonzero(normal)
+        z, r = self.z, self.rest
         self.A_rr = A[r][:, r]
         self.A_rz = A[r][:, z]
         self.A_zr = A[z][:, r]
@@ -119,14 +117,8 @@ class NormalElimination:
         r, z = self.rest, self.z
         if A.shape != (len(r) + len(z),) * 2:
             return False
-        return all(
-            abs(new - old).max() == 0 if (new - old).nnz else True
-            for new, old in (
-                (A[r][:, r], self.A_rr),
-                (A[r][:, z], self.A_rz),
-                (A[z][:, r], self.A_zr),
-            )
-        )
+        blocks = ((A[r][:, r], self.A_rr), (A[r][:, z], self.A_rz), (A[z][:, r], self.A_zr))
+        return all((new - old).count_nonzero() == 0 for new, old in blocks)
 
     def _factor(self, A: sp.csr_matrix) -> None:
         z = self.z
