@@ -441,7 +441,7 @@ def report(
         f"{peak['frequency_hz']:g} Hz | - | prediction |",
         f"| thrust rig: peak thrust | - | <= {THRUST_READABLE_N} N readable | "
         f"{peak['thrust_n']:.3f} N | - | prediction |",
-        f"| thrust 5 Hz / 3 Hz (Sec. 4.3.2: below 1) | - | < 1 | "
+        f"| thrust 5 Hz / 3 Hz (Sec. 3.5.2.4, the seed's FSI: below 1) | < 1 | - | "
         f"{at[5] / at[3]:.2f} | - | prediction |",
         "",
         "Thrust curve of the original fish on the rig (square wave, slender-body thrust on "
