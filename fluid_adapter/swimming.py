@@ -3,8 +3,21 @@
 Frame and midline as in :mod:`fluid_adapter.slender_body`: x from the nose (0) to the tail (L),
 the fish swims toward -x at speed V, h(x, t) the lateral (z) displacement of the midline over
 whole periods, b(x) the half-height, A = rho pi b^2 gamma (eq. 5-3), w = h_t + V h_x (eq. 5-4).
-The motion is the free body's periodic response in still liquid (its recoil included), taken
-as unchanged by the forward speed.
+The motion is the free body's periodic response (its recoil included), either in still liquid
+at every speed or, with :class:`SpeedLoads`, the response at the speed itself.
+
+Motion at speed. Beyond the still liquid's added mass A h_tt (in the structure's inertia), the
+sections' lateral load l = -D(A w)/Dt (-A Dw/Dt where A' < 0) holds, for a harmonic
+h = Re(H e^{i w t}),
+
+    l_V = -i w V (2 A H' + A'_+ H) - V^2 (A H'' + A'_+ H'),   A'_+ = max(A', 0),
+
+a damping that grows with V (the wake's energy: Lighthill 1960's power A V <w h_t>(L) is its
+work) and a stiffness that falls as -V^2 (the divergence load of a plate in axial flow).
+Projected on the modes' midline shapes phi_j: Q_j = int phi_j l_V dx = -(i w V C + V^2 K) q.
+This is the elongated-body load of a flexible plate in axial flow (e.g. Singh, Michelin & de
+Langre 2012, Proc. R. Soc. A 468, 3620; Eloy, Kofman & Schouveiler 2012, J. Fluid Mech. 691,
+583), on the 3D added mass's structure.
 
 Speed. The mean thrust T(V) is Lighthill's elongated-body thrust at forward speed (eq. 5-12,
 :func:`fluid_adapter.slender_body.slender_body_thrust`); it falls with V because the tail's
@@ -157,6 +170,49 @@ def mean_pressure_thrust(
     shedding = np.gradient(area, x) < 0
     force = np.where(shedding[None, :], -area[None, :] * material(w), -material(area[None, :] * w))
     return float(trapezoid(np.mean(force * h_x, axis=0), x))
+
+
+@dataclass(frozen=True)
+class SpeedLoads:
+    """The modal matrices of the lateral load at forward speed (module docstring): the load
+    on the modes is -(i w V damping_per_speed + V^2 stiffness_per_speed_squared) q."""
+
+    damping_per_speed: NDArray  # C, (m, m)
+    stiffness_per_speed_squared: NDArray  # K, (m, m)
+
+    def damping(self, speed_m_s: float) -> NDArray:
+        return speed_m_s * self.damping_per_speed
+
+    def stiffness(self, speed_m_s: float) -> NDArray:
+        return speed_m_s**2 * self.stiffness_per_speed_squared
+
+
+def speed_loads(
+    x: NDArray,
+    half_height: NDArray,
+    shapes: NDArray,
+    *,
+    density_kg_m3: float,
+    added_mass_coefficient: float = 1.0,
+) -> SpeedLoads:
+    """SpeedLoads of modes whose midline lateral displacements at ``x`` are the rows of
+    ``shapes`` (m, n_x); derivatives by finite differences, integrals by the trapezoid rule."""
+    x = np.asarray(x, dtype=float)
+    phi = np.asarray(shapes, dtype=float)
+    area = added_mass_per_length(half_height, density_kg_m3, added_mass_coefficient)
+    growing = np.maximum(np.gradient(area, x), 0.0)
+    d1 = np.gradient(phi, x, axis=1)
+    d2 = np.gradient(d1, x, axis=1)
+    weights = np.zeros_like(x)
+    weights[:-1] += np.diff(x) / 2
+    weights[1:] += np.diff(x) / 2
+    test = phi * weights
+    # a blunt nose: A steps up from 0 there, A'_+ holds A(0) delta(x)
+    nose = area[0] * phi[:, :1]
+    return SpeedLoads(
+        damping_per_speed=test @ (2 * area * d1 + growing * phi).T + nose @ phi[:, :1].T,
+        stiffness_per_speed_squared=test @ (growing * d1 + area * d2).T + nose @ d1[:, :1].T,
+    )
 
 
 def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:

@@ -255,10 +255,16 @@ def mean_voltage_equilibrium(
 
 
 def mean_voltage_modal_sweep(
-    case: Case, model: ShellModel, drive: DriveSignal, x_static: NDArray, modes: int
+    case: Case,
+    model: ShellModel,
+    drive: DriveSignal,
+    x_static: NDArray,
+    modes: int,
+    with_rigid: bool = False,
 ) -> ModalSweep:
     """The (wet) plate's frequency response by modal superposition about the mean-voltage
-    equilibrium x_static, with the case's Rayleigh damping (fsi-sweep --method linear)."""
+    equilibrium x_static, with the case's Rayleigh damping (fsi-sweep --method linear);
+    ``with_rigid``: a free plate's rigid modes in the superposition too."""
     return ModalSweep.build(
         model,
         harmonic_load(model, drive, x_static),
@@ -266,6 +272,7 @@ def mean_voltage_modal_sweep(
         rayleigh_coefficients(case, model),
         stiffness=mean_voltage_tangent(model, x_static, drive),
         loss_factor=case.material.loss_factor,
+        with_rigid=with_rigid,
     )
 
 

@@ -263,6 +263,9 @@ class ModalSweep:
     static: NDArray  # K^-1 F (ndof,)
     modal_load: NDArray  # phi_j . F
     loss_factor: float = 0.0  # structural (hysteretic): w_j^2 (1 + i eta)
+    # leading modes at zero frequency: a free body's rigid motions, kept where a load that is
+    # not self-equilibrated moves them (the fluid's load at forward speed)
+    rigid: int = 0
 
     @classmethod
     def build(
@@ -273,9 +276,10 @@ class ModalSweep:
         rayleigh: tuple[float, float] = (0.0, 0.0),
         stiffness: sp.spmatrix | None = None,
         loss_factor: float = 0.0,
+        with_rigid: bool = False,
     ) -> ModalSweep:
         """``stiffness``: the tangent to oscillate about (mean_voltage_tangent; default the
-        unloaded plate's)."""
+        unloaded plate's). ``with_rigid``: a free plate's rigid modes lead the superposition."""
         from .solvers import modal_analysis, static_free_dofs
 
         K = stiffness
@@ -292,13 +296,21 @@ class ModalSweep:
         if result.rigid_shapes is not None:
             rigid = result.rigid_shapes
             static -= rigid.T @ (rigid @ (model.inertia @ static))
+        shapes, zetas = result.shapes, alpha / (2 * omegas) + beta * omegas / 2
+        n_rigid = 0
+        if with_rigid and result.rigid_shapes is not None:
+            n_rigid = len(result.rigid_shapes)
+            shapes = np.vstack([result.rigid_shapes, shapes])
+            omegas = np.concatenate([np.zeros(n_rigid), omegas])
+            zetas = np.concatenate([np.zeros(n_rigid), zetas])  # no Rayleigh alpha there
         return cls(
             omegas=omegas,
-            shapes=result.shapes,
-            zetas=alpha / (2 * omegas) + beta * omegas / 2,
+            shapes=shapes,
+            zetas=zetas,
             static=static,
-            modal_load=result.shapes @ load,
+            modal_load=shapes @ load,
             loss_factor=loss_factor,
+            rigid=n_rigid,
         )
 
     def response(
@@ -306,21 +318,27 @@ class ModalSweep:
         omega: float,
         modal_damping: NDArray | None = None,
         modal_mass: NDArray | None = None,
+        modal_stiffness: NDArray | None = None,
     ) -> NDArray:
         """``modal_damping``: a damping beyond Rayleigh's in modal coordinates, phi^T C phi
         (m x m, it couples the modes), e.g. the fluid's edge drag linearized; ``modal_mass``
-        likewise an extra inertia phi^T M phi (the edge inertia)."""
+        likewise an extra inertia phi^T M phi (the edge inertia); ``modal_stiffness`` an extra
+        stiffness (the fluid's load at forward speed). The rigid modes have no static part."""
         wj = self.omegas
+        static_part = np.zeros_like(wj)  # 1 / w_j^2: the share the static correction holds
+        static_part[self.rigid :] = 1.0 / wj[self.rigid :] ** 2
         stiffness = wj**2 * (1 + 1j * self.loss_factor)
-        if modal_damping is None and modal_mass is None:
-            dynamic = 1.0 / (stiffness - omega**2 + 2j * self.zetas * wj * omega) - 1.0 / wj**2
+        if modal_damping is None and modal_mass is None and modal_stiffness is None:
+            dynamic = 1.0 / (stiffness - omega**2 + 2j * self.zetas * wj * omega) - static_part
             return self.static + (self.modal_load * dynamic) @ self.shapes
         A = np.diag(stiffness - omega**2 + 2j * self.zetas * wj * omega).astype(complex)
         if modal_damping is not None:
             A += 1j * omega * modal_damping
         if modal_mass is not None:
             A -= omega**2 * modal_mass
-        q = np.linalg.solve(A, self.modal_load) - self.modal_load / wj**2
+        if modal_stiffness is not None:
+            A += modal_stiffness
+        q = np.linalg.solve(A, self.modal_load) - self.modal_load * static_part
         return self.static + q @ self.shapes
 
     def modal_projection(self, matrix: sp.spmatrix) -> NDArray:
@@ -343,10 +361,11 @@ def sweep_response(
     n_harmonics: int = 15,
     modal_damping: NDArray | None = None,
     modal_mass: NDArray | None = None,
+    modal_stiffness: NDArray | None = None,
 ) -> PeriodicResponse:
     omega = 2 * np.pi * drive.frequency_hz
     harmonics = [
-        (k, c * sweep.response(k * omega, modal_damping, modal_mass))
+        (k, c * sweep.response(k * omega, modal_damping, modal_mass, modal_stiffness))
         for k, c in harmonic_amplitudes(drive, n_harmonics)
     ]
     return PeriodicResponse(omega=omega, x_static=x_static, harmonics=harmonics)
@@ -360,13 +379,19 @@ def damped_sweep_response(
     model: ShellModel,
     tip_dof: int,
     inertia_model=None,
+    extra_damping: NDArray | None = None,
+    extra_stiffness: NDArray | None = None,
 ) -> PeriodicResponse:
     """sweep_response with an amplitude-dependent damping (the fluid's edge drag), and
     optionally an amplitude-dependent extra inertia (the edge inertia), in modal coordinates,
-    linearized about the response itself (linearized_damping_response)."""
+    linearized about the response itself (linearized_damping_response). ``extra_damping`` and
+    ``extra_stiffness``: fixed modal matrices beside them (the fluid's load at forward speed)."""
     m = len(sweep.omegas)
+    fixed = np.zeros((m, m)) if extra_damping is None else extra_damping
     damped = linearized_damping_response(
-        lambda modal: sweep_response(sweep, drive, x_static, modal_damping=modal),
+        lambda modal: sweep_response(
+            sweep, drive, x_static, modal_damping=modal + fixed, modal_stiffness=extra_stiffness
+        ),
         lambda response: sweep.modal_projection(damping_model.linear(model, response)),
         np.zeros((m, m)),
         tip_dof,
@@ -385,7 +410,14 @@ def damped_sweep_response(
     # both laws together, from the drag's own answer: from no damping the first response
     # overshoots near a resonance, and the mass then settles slowly
     return linearized_damping_response(
-        lambda cm: sweep_response(sweep, drive, x_static, modal_damping=cm[0], modal_mass=cm[1]),
+        lambda cm: sweep_response(
+            sweep,
+            drive,
+            x_static,
+            modal_damping=cm[0] + fixed,
+            modal_mass=cm[1],
+            modal_stiffness=extra_stiffness,
+        ),
         laws,
         laws(damped),
         tip_dof,

@@ -144,9 +144,11 @@ def test_the_flume_case_runs_its_fast_model_at_the_flume_speed():
 
 # The coarse flume's mean plate force (thrust less skin friction) on the original robot's
 # free-body motion, 18 Hz square wave (benchmarks/swimming_flume.py; docs/swimming.md), made
-# with the fast model's motion of this electrode spacing: the fast side compares on it too
+# with the fast model's motion of this electrode spacing in still liquid: the fast side
+# compares on that motion too
 CFD_PLATE_FORCE_N = {0.05: 0.1150, 0.8: -0.2442}
-FLUME_MOTION = ["actuation.electrode_spacing_m=0.514e-3"]
+FLUME_MOTION = ["actuation.electrode_spacing_m=0.514e-3", "swimming.speed_coupling=false"]
+STILL_MOTION = "swimming.speed_coupling=false"  # the motion in still liquid at every speed
 
 
 @pytest.mark.parametrize("speed", sorted(CFD_PLATE_FORCE_N))
@@ -166,17 +168,19 @@ def test_the_pressure_share_of_the_thrust_is_closer_to_the_flume_than_lighthills
 
 
 def test_the_free_original_robots_speed_with_either_thrust_model():
-    """At 18 Hz square the robot swam 0.72 m/s (Sec. 4.4). The pressure's share of the
-    thrust swims the model's free robot within 10 % of that, Lighthill's thrust at twice it;
-    the CFD flume on the same motion finds 0.23 m/s (docs/swimming.md), so neither settles
-    the free motion."""
+    """At 18 Hz square the robot swam 0.72 m/s (Sec. 4.4). On the motion in still liquid
+    the pressure's share of the thrust swims the model's free robot within 10 % of that,
+    Lighthill's thrust at twice it; the CFD flume on the same motion finds 0.23 m/s
+    (docs/swimming.md), so neither settles the free motion."""
     from fishfsi.cli.linear import swimming_summary
 
     swim = ROOT / "cases" / "swim_original_18Hz"
-    pressure = swimming_summary(load_case(swim, overrides=["swimming.thrust_model=pressure"]))
+    pressure = swimming_summary(
+        load_case(swim, overrides=["swimming.thrust_model=pressure", STILL_MOTION])
+    )
     assert pressure["thrust_at_speed_n"] == pressure["pressure_thrust_at_speed_n"]
     assert pressure["swimming_speed_m_s"] == pytest.approx(0.72, rel=0.10)
-    lighthill = swimming_summary(load_case(swim))
+    lighthill = swimming_summary(load_case(swim, overrides=[STILL_MOTION]))
     assert lighthill["swimming_speed_m_s"] > 1.8 * 0.72
 
 
@@ -237,14 +241,15 @@ def test_fsi_run_of_the_flume_case_reports_the_cfd_and_the_model(tmp_path):
 
 def test_a_head_on_stiff_springs_makes_the_pressure_share_swim_faster():
     """The same robot with its head on springs of 1e4 N/m (boundary.head = "elastic", a
-    sensitivity study): the recoil is held and the pressure share swims it at 1.30 m/s
-    (docs/swimming.md), twice the free robot's 0.67 m/s."""
+    sensitivity study; the motion in still liquid): the recoil is held and the pressure
+    share swims it at 1.30 m/s (docs/swimming.md), twice the free robot's 0.67 m/s."""
     from fishfsi.cli.linear import swimming_summary
 
     swim = ROOT / "cases" / "swim_original_18Hz"
-    held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4"]
+    held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4", STILL_MOTION]
+    pressure = ["swimming.thrust_model=pressure", STILL_MOTION]
     row = swimming_summary(load_case(swim, overrides=[*held, "swimming.thrust_model=pressure"]))
-    free = swimming_summary(load_case(swim, overrides=["swimming.thrust_model=pressure"]))
+    free = swimming_summary(load_case(swim, overrides=pressure))
     assert row["swimming_speed_m_s"] == pytest.approx(1.30, abs=0.02)
     assert row["pressure_thrust_at_speed_n"] > 0
     assert row["swimming_speed_m_s"] > 1.5 * free["swimming_speed_m_s"]

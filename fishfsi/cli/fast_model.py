@@ -19,6 +19,7 @@ from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import AnalysisKind, FluidDomain, FluidModel, Waveform
 
 if TYPE_CHECKING:
+    from fluid_adapter.swimming import SpeedLoads
     from solid_adapter.harmonic import ModalSweep, PeriodicResponse
     from solid_adapter.shell import ShellModel
 
@@ -91,16 +92,23 @@ class LinearModel:
     x_static: NDArray
     sweep: ModalSweep
     tip: int  # the tail tip's node
+    speed_loads: SpeedLoads | None = None  # the fluid's load at forward speed, on sweep's modes
 
-    def response(self, frequency_hz: float, waveform: Waveform) -> PeriodicResponse:
+    def response(
+        self, frequency_hz: float, waveform: Waveform, speed_m_s: float = 0.0
+    ) -> PeriodicResponse:
         """The periodic response to the case's drive at ``frequency_hz`` and ``waveform``; the
-        edge drag's damping at that frequency."""
+        edge drag's damping at that frequency; at ``speed_m_s`` where speed_loads are set."""
         from fluid_adapter.drag import edge_drag
         from solid_adapter.harmonic import damped_sweep_response, sweep_response
         from solid_adapter.piezo import DriveSignal
 
         case, model = self.case, self.model
         drive = DriveSignal.from_case(with_drive(case, frequency_hz, waveform))
+        extra_damping = extra_stiffness = None
+        if self.speed_loads is not None and speed_m_s > 0:
+            extra_damping = self.speed_loads.damping(speed_m_s)
+            extra_stiffness = self.speed_loads.stiffness(speed_m_s)
         if case.fluid.edge_drag:
             drag = edge_drag(
                 model,
@@ -116,8 +124,16 @@ class LinearModel:
                 model,
                 self.tip * 5 + 2,
                 case_edge_inertia(case, model),
+                extra_damping=extra_damping,
+                extra_stiffness=extra_stiffness,
             )
-        return sweep_response(self.sweep, drive, self.x_static)
+        return sweep_response(
+            self.sweep,
+            drive,
+            self.x_static,
+            modal_damping=extra_damping,
+            modal_stiffness=extra_stiffness,
+        )
 
 
 def carries_edge_inertia(case: Case) -> bool:
@@ -160,11 +176,40 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
         raise SweepError(
             "linear sweep, static step: the equilibrium under the mean voltages is not finite"
         )
+    coupled = speed_coupled(case)
     with np.errstate(divide="ignore", invalid="ignore"):  # checked below, in one line
-        sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES)
+        sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES, with_rigid=coupled)
     check_modal_sweep(sweep)
     tip = model.mesh.nearest_node(*model.layout.tip_point)
-    return LinearModel(case=case, model=model, x_static=x_static, sweep=sweep, tip=tip)
+    loads = None
+    if coupled:  # at speed the fluid's load moves the free body's sway and yaw too
+        from fluid_adapter.swimming import speed_loads
+        from solid_adapter.shell import NDOF
+
+        midline = midline_nodes(model)
+        xs = model.mesh.nodes[midline, 0]
+        loads = speed_loads(
+            xs,
+            model.layout.height(xs) / 2,
+            sweep.shapes[:, midline * NDOF + 2],
+            density_kg_m3=case.fluid.density_kg_m3,
+            added_mass_coefficient=case.fluid.added_mass_coefficient,
+        )
+    return LinearModel(
+        case=case, model=model, x_static=x_static, sweep=sweep, tip=tip, speed_loads=loads
+    )
+
+
+def speed_coupled(case: Case) -> bool:
+    """Whether a case's motion is the one at its swimming speed (swimming.speed_coupling)."""
+    return case.analysis.kind is AnalysisKind.SWIMMING and case.swimming.speed_coupling
+
+
+def midline_nodes(model) -> NDArray:
+    """The nodes on the plate's axis y = 0, nose to tail."""
+    nodes = model.mesh.nodes
+    on_axis = np.flatnonzero(np.abs(nodes[:, 1]) < 1e-12 * model.layout.length_m)
+    return on_axis[np.argsort(nodes[on_axis, 0])]
 
 
 def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
@@ -175,8 +220,8 @@ def with_drive(case: Case, frequency_hz: float, waveform: Waveform) -> Case:
 def check_modal_sweep(sweep) -> None:
     """The modal superposition needs every wet mode at a positive, finite frequency and a
     finite static correction: a singular or indefinite tangent (a mechanism, or a plate
-    buckled by the mean voltages) has none."""
-    omegas = np.asarray(sweep.omegas)
+    buckled by the mean voltages) has none. The rigid modes it holds are at 0 by design."""
+    omegas = np.asarray(sweep.omegas)[sweep.rigid :]
     bad = np.flatnonzero(~(np.isfinite(omegas) & (omegas > 0)))
     if bad.size:
         j = int(bad[0])

@@ -36,12 +36,13 @@ class FlumeError(RuntimeError):
 def free_body_harmonics(case: Case) -> tuple[NDArray, list[tuple[int, NDArray]]]:
     """The shell nodes (n, 2) and the harmonics (k, complex (n, 3)) of the nodal translations of
     the fast model's periodic response about the mean-voltage equilibrium at the case's drive
-    (as fsi-sweep --method linear computes it, recoil included: the head is free)."""
+    (as fsi-sweep --method linear computes it, recoil included: the head is free), at the
+    flume's speed (swimming.speed_coupling; in still liquid where that is false)."""
     from solid_adapter.shell import NDOF
 
     linear = linear_model(case)
     a = case.actuation
-    response = linear.response(a.frequency_hz, a.waveform)
+    response = linear.response(a.frequency_hz, a.waveform, case.swimming.speed_m_s or 0.0)
     harmonics = [(k, X.reshape(-1, NDOF)[:, :3]) for k, X in response.harmonics]
     return linear.model.mesh.nodes.copy(), harmonics
 

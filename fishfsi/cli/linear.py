@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from fsi_orchestrator.case import Case
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, Waveform
 
-from .fast_model import SweepError, linear_model, without_cfd
+from .fast_model import SweepError, linear_model, midline_nodes, without_cfd
 from .swimming import SWIMMING_KEYS, swimming_model
 
 if TYPE_CHECKING:
@@ -56,7 +57,7 @@ def linear_sweep(
 
     linear = linear_model(case)
     model, tip = linear.model, linear.tip
-    midline = _midline(model)
+    midline = midline_nodes(model)
     xs = model.mesh.nodes[midline, 0]
     half_height = model.layout.height(xs) / 2
     swim = None
@@ -102,8 +103,16 @@ def linear_sweep(
             row["thrust_source"] = "slender_body"
             checked += ["slender_body_mean_thrust_n", "mean_thrust_n"]
         if swim is not None and np.all(np.isfinite(h)):
-            row.update(swim.row(times, h, f))
-            checked += SWIMMING_KEYS
+            at_speed = _motion_at_speed(linear, f, waveform, response)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                history = partial(_history_at_speed, at_speed, midline * 5 + 2, times)
+                row.update(swim.row(times, history, f))
+                if linear.speed_loads is not None:  # the tail's swing while it swims
+                    tip_at_speed = at_speed(row["swimming_speed_m_s"]).dof_history(
+                        np.array([tip * 5 + 2]), times
+                    )
+                    row["tip_amplitude_at_speed_m"] = float(np.ptp(tip_at_speed) / 2)
+            checked += [*SWIMMING_KEYS, "tip_amplitude_at_speed_m"]
         # the periodic response itself: no start-up to settle
         row.update(
             tip_amplitude_periodic_m=row["tip_amplitude_m"],
@@ -128,6 +137,25 @@ def linear_sweep(
     return rows
 
 
+def _motion_at_speed(linear, frequency_hz: float, waveform: Waveform, still):
+    """The periodic response at a forward speed, remembered per speed; ``still`` at every
+    speed where the motion is not coupled to the speed (swimming.speed_coupling)."""
+    if linear.speed_loads is None:
+        return lambda speed: still
+    known: dict[float, object] = {0.0: still}
+
+    def at(speed: float):
+        if speed not in known:
+            known[speed] = linear.response(frequency_hz, waveform, speed)
+        return known[speed]
+
+    return at
+
+
+def _history_at_speed(at_speed, dofs: np.ndarray, times: np.ndarray, speed: float) -> np.ndarray:
+    return at_speed(speed).dof_history(dofs, times)
+
+
 # a tail amplitude past this fraction of the plate's length is outside the linear model
 LINEAR_RANGE = 0.2
 
@@ -139,12 +167,6 @@ def not_finite_status(row: dict, keys: Sequence[str], step: str = "linear respon
     if not bad or row.get("status", "ok").startswith("failed"):
         return row.get("status", "ok")
     return f"failed: {', '.join(bad)} not finite ({step})"
-
-
-def _midline(model) -> np.ndarray:
-    nodes = model.mesh.nodes
-    on_axis = np.flatnonzero(np.abs(nodes[:, 1]) < 1e-12 * model.layout.length_m)
-    return on_axis[np.argsort(nodes[on_axis, 0])]
 
 
 def swimming_summary(case: Case) -> dict:

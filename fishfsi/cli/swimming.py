@@ -9,6 +9,7 @@ drive's figures; ``fsi-sweep`` adds them to each frequency's row. docs/swimming.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -50,9 +51,11 @@ class SwimmingModel:
     prescribed_speed_m_s: float | None
     pressure_thrust: bool = False  # swimming.thrust_model = "pressure"
 
-    def row(self, times: NDArray, h: NDArray, frequency_hz: float) -> dict:
-        """The swimming columns of one drive from the midline history ``h`` (len(times), n_x)
-        sampled at ``times`` over one period (the end point may repeat the start)."""
+    def row(self, times: NDArray, history: Callable[[float], NDArray], frequency_hz: float) -> dict:
+        """The swimming columns of one drive from the midline history at a forward speed,
+        ``history(V)`` (len(times), n_x), sampled at ``times`` over one period (the end point
+        may repeat the start); the same array at every speed where the motion is taken as
+        unchanged by the speed."""
         from fluid_adapter.swimming import (
             mean_pressure_thrust,
             mean_thrust,
@@ -61,7 +64,11 @@ class SwimmingModel:
         )
 
         dt = float(times[1] - times[0])
-        h = np.asarray(h)[-round(1 / (frequency_hz * dt)) :]
+        period = round(1 / (frequency_hz * dt))
+
+        def motion(v: float) -> NDArray:
+            return np.asarray(history(v))[-period:]
+
         x, b, r = self.x_m, self.half_height_m, self.x_m - self.x_ref_m
         fluid = {
             "density_kg_m3": self.density_kg_m3,
@@ -71,8 +78,7 @@ class SwimmingModel:
         thrust_of = mean_pressure_thrust if self.pressure_thrust else mean_thrust
 
         def speed_with(slip: float) -> tuple[float, float]:
-            h_body = h + slip * r
-            thrust = lambda v: thrust_of(x, b, h_body, dt, v, **fluid)  # noqa: E731
+            thrust = lambda v: thrust_of(x, b, motion(v) + slip * r, dt, v, **fluid)  # noqa: E731
             speed = self.prescribed_speed_m_s
             if speed is None:
                 speed = self_propelled_speed(thrust, self.drag.total)
@@ -82,6 +88,7 @@ class SwimmingModel:
         turn: Turning | None = None
         for _ in range(SLIP_ITERATIONS):
             speed, thrust = speed_with(slip)
+            h = motion(speed)
             turn = turning_rate(
                 x,
                 b,

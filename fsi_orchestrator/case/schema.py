@@ -941,6 +941,13 @@ class Swimming:
         ge=0,
         le=1e-3,
     )
+    speed_coupling: bool = param(
+        True,
+        "Feed the lateral load that forward speed adds (slender-body theory: -(d/dt + V d/dx) "
+        "of the sections' momentum beyond the still liquid's added mass) back into the "
+        "structure, so the motion is the one at the speed: its wake takes energy and damps "
+        "the tail. false: the motion in still liquid at every speed (docs/swimming.md).",
+    )
     crossflow_drag_coefficient: float = param(
         1.2,
         "Turning: drag of the plate's sections moving sideways as the body rotates (a flat "
