@@ -4,7 +4,7 @@ seed's asymmetric drives, and each curve's run time (target <= 1 min).
 
     python benchmarks/swimming.py [--write-docs]
 
-``--write-docs`` replaces the generated part of docs/swimming.md. About 5 min on 2 cores.
+``--write-docs`` replaces the generated part of docs/swimming.md. About 8 min on 2 cores.
 """
 
 from __future__ import annotations
@@ -74,6 +74,35 @@ def curves() -> tuple[dict, dict]:
     return rows, seconds
 
 
+# the seed's least energy per distance over its frequencies, H = W / V (eq. 5-13, from the
+# measured electrical energy), and 16 % of it, the MFC's best share of useful work (eq. 5-14;
+# Sec. 5.3.2, 5.4.2): the old robot's 0.16 J/m of useful work, the serial's least H 2.3 J/m
+# (0.37 useful), the integrative's 2.1 J/m (0.34); the seed does not say at which frequency
+SEED_WORK_PER_DISTANCE_J_M = {
+    "original": (0.16 / 0.16, 0.16),
+    "serial": (2.3, 0.37),
+    "integrative": (2.1, 0.34),
+}
+# a frequency the seed measured each robot's swimming at (square wave): the original's and the
+# serial's top speeds, the integrative's turn
+MEASURED_AT_HZ = {"original": 18.0, "serial": 25.0, "integrative": 15.0}
+STILL_MOTION = "swimming.speed_coupling=false"
+
+
+def motion_at_speed_against_still() -> dict:
+    """Each robot at its measured frequency, square wave: the figures of the motion at the
+    swimming speed and of the motion in still liquid."""
+    found = {}
+    for robot, (folder, base) in ROBOTS.items():
+        drive = [f"actuation.frequency_hz={MEASURED_AT_HZ[robot]:g}", "actuation.waveform='square'"]
+        found[robot] = tuple(
+            swimming_summary(load_case(folder, [*base, *drive, *extra]))
+            for extra in ((), (STILL_MOTION,))
+        )
+        print(f"{robot}: {found[robot][0]['swimming_speed_m_s']:.2f} m/s", flush=True)
+    return found
+
+
 def turns() -> dict:
     found = {}
     for name, (robot, overrides, measured) in TURNS.items():
@@ -100,7 +129,9 @@ def head_springs() -> list[tuple[float | None, dict, dict]]:
             else ["boundary.head=elastic", f"boundary.support_stiffness_n_per_m={k:g}"]
         )
         by_model = {
-            m: swimming_summary(load_case(folder, [*base, *held, f"swimming.thrust_model={m}"]))
+            m: swimming_summary(
+                load_case(folder, [*base, *held, f"swimming.thrust_model={m}", STILL_MOTION])
+            )
             for m in ("lighthill", "pressure")
         }
         found.append((k, by_model["lighthill"], by_model["pressure"]))
@@ -108,7 +139,7 @@ def head_springs() -> list[tuple[float | None, dict, dict]]:
     return found
 
 
-def report(rows: dict, seconds: dict, turning: dict, springs: list) -> str:
+def report(rows: dict, seconds: dict, turning: dict, springs: list, coupling: dict) -> str:
     lines = [
         START,
         "",
@@ -138,6 +169,33 @@ def report(rows: dict, seconds: dict, turning: dict, springs: list) -> str:
         "0.792 m/s at 25 Hz, 4.6 BL/s, Sw 0.6 (Sec. 5.3.2, Table 5.8); integrative 3.5 BL/s, "
         "Sw 0.75 (Table 5.8).",
         "",
+        "Each robot at a frequency the seed measured it at, square wave: the motion at the "
+        "swimming speed (the default) and the motion in still liquid (`--set "
+        "swimming.speed_coupling=false`); the actuators' mechanical work per distance "
+        "beside the seed's least energy per distance over its frequencies (eq. 5-13, measured "
+        "electrical) and the MFC's best share of it as useful work (16 %, eq. 5-14):",
+        "",
+        "| robot, f | speed [m/s] (still liquid's motion) | measured [m/s] | tail swing at "
+        "speed [mm] (in still liquid) | actuators' power [W] | work per distance [J/m] | "
+        "seed: least electrical / 16 % of it [J/m] |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    measured_speed = {
+        "original": f"{MEASURED['original']['speed_m_s']:.2f}",
+        "serial": f"{MEASURED['serial']['speed_m_s']:.3f}",
+        "integrative": "- (3.5 BL/s max)",
+    }
+    for robot, (at_speed, still) in coupling.items():
+        electrical, useful = SEED_WORK_PER_DISTANCE_J_M[robot]
+        lines.append(
+            f"| {robot}, {MEASURED_AT_HZ[robot]:g} Hz | {at_speed['swimming_speed_m_s']:.2f} "
+            f"({still['swimming_speed_m_s']:.2f}) | {measured_speed[robot]} | "
+            f"{at_speed['tip_amplitude_at_speed_m'] * 1e3:.1f} "
+            f"({still['tip_amplitude_m'] * 1e3:.1f}) | {at_speed['drive_power_at_speed_w']:.2f} | "
+            f"{at_speed['work_per_distance_j_m']:.2f} | {electrical:.1f} / {useful:.2f} |"
+        )
+    lines += [
+        "",
         "| turning drive | model [deg/s] | measured [deg/s] | speed [m/s] | sideslip [deg] |",
         "|---|---|---|---|---|",
     ]
@@ -150,7 +208,7 @@ def report(rows: dict, seconds: dict, turning: dict, springs: list) -> str:
         "",
         "Original robot, 18 Hz square, head on springs (`--set boundary.head=elastic --set "
         "boundary.support_stiffness_n_per_m=K`; the springs rest under the head weight, along "
-        "x, y and z):",
+        "x, y and z), on the motion in still liquid (the flume's CFD below was made on it):",
         "",
         "| head | tail amplitude [mm] | speed, Lighthill's thrust [m/s] | speed, pressure "
         "share [m/s] | pressure share's thrust there [N] |",
@@ -186,7 +244,7 @@ def write_docs(text: str) -> None:
 
 def main(argv: list[str]) -> None:
     rows, seconds = curves()
-    text = report(rows, seconds, turns(), head_springs())
+    text = report(rows, seconds, turns(), head_springs(), motion_at_speed_against_still())
     print(text)
     if "--write-docs" in argv:
         write_docs(text)

@@ -143,3 +143,23 @@ def test_a_damped_thin_plate_steps_in_few_newton_iterations(tmp_path, capsys):
     summary = json.loads(capsys.readouterr().out)
     assert summary["windows"] == 4
     assert summary["mean_newton_iterations_per_window"] <= 6
+
+
+@pytest.mark.parametrize("fraction", [0.5, 1.0])
+def test_the_drive_power_in_air_is_the_laminates_loss(fraction):
+    """In air the actuators' mean power over a period is what the laminate's loss takes out,
+    1/2 w eta sum_j w_j^2 |q_j|^2 over the modes (q_j the modal amplitudes), below and at
+    the beam's first resonance."""
+    from fishfsi.cli.fast_model import linear_model
+    from fsi_orchestrator.case.schema import Waveform
+
+    linear = linear_model(load_case(BEAM, ["mesh.level=coarse"]))
+    sweep = linear.sweep
+    omega = fraction * sweep.omegas[0]
+    response = linear.response(omega / (2 * np.pi), Waveform.SINE)
+    ((_, X),) = response.harmonics
+    q = sweep.shapes @ (linear.model.inertia @ X)
+    loss = 0.5 * omega * ETA * np.sum(sweep.omegas**2 * np.abs(q) ** 2)
+    power = linear.drive_power(response, Waveform.SINE)
+    assert power > 0
+    assert power == pytest.approx(loss, rel=1e-3)

@@ -93,6 +93,24 @@ class LinearModel:
     sweep: ModalSweep
     tip: int  # the tail tip's node
     speed_loads: SpeedLoads | None = None  # the fluid's load at forward speed, on sweep's modes
+    drive_load: NDArray | None = None  # the load of a unit oscillation of the drive (N)
+
+    def drive_power(self, response: PeriodicResponse, waveform: Waveform) -> float:
+        """The mean mechanical power (W) the actuators put into the plate over a period of
+        ``response``: what the liquid and the laminate's loss take out of the periodic motion
+        (for the seed's energy per distance, eq. 5-13)."""
+        from solid_adapter.harmonic import harmonic_amplitudes
+        from solid_adapter.piezo import DriveSignal
+
+        if self.drive_load is None:
+            return float("nan")
+        drive = DriveSignal.from_case(with_drive(self.case, 1.0, waveform))
+        amplitude = dict(harmonic_amplitudes(drive, len(response.harmonics)))
+        return sum(
+            0.5
+            * float(np.real(np.vdot(1j * k * response.omega * X, amplitude[k] * self.drive_load)))
+            for k, X in response.harmonics
+        )
 
     def response(
         self, frequency_hz: float, waveform: Waveform, speed_m_s: float = 0.0
@@ -165,6 +183,7 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
         mean_voltage_modal_sweep,
         static_loads,
     )
+    from solid_adapter.harmonic import harmonic_load
     from solid_adapter.piezo import DriveSignal
 
     case = without_cfd(case)
@@ -196,7 +215,13 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
             added_mass_coefficient=case.fluid.added_mass_coefficient,
         )
     return LinearModel(
-        case=case, model=model, x_static=x_static, sweep=sweep, tip=tip, speed_loads=loads
+        case=case,
+        model=model,
+        x_static=x_static,
+        sweep=sweep,
+        tip=tip,
+        speed_loads=loads,
+        drive_load=harmonic_load(model, drive0, x_static),
     )
 
 

@@ -94,6 +94,7 @@ def linear_sweep(
             "waveform": waveform.value,
             "frequency_hz": float(f),
             "tip_amplitude_m": float(np.ptp(tip_z) / 2),
+            "drive_power_w": linear.drive_power(response, waveform),
             "status": "ok",
         }
         checked = ["tip_amplitude_m"]
@@ -107,12 +108,17 @@ def linear_sweep(
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 history = partial(_history_at_speed, at_speed, midline * 5 + 2, times)
                 row.update(swim.row(times, history, f))
+                speed = float(row["swimming_speed_m_s"])
                 if linear.speed_loads is not None:  # the tail's swing while it swims
-                    tip_at_speed = at_speed(row["swimming_speed_m_s"]).dof_history(
-                        np.array([tip * 5 + 2]), times
-                    )
+                    swimming = at_speed(speed)
+                    tip_at_speed = swimming.dof_history(np.array([tip * 5 + 2]), times)
                     row["tip_amplitude_at_speed_m"] = float(np.ptp(tip_at_speed) / 2)
-            checked += [*SWIMMING_KEYS, "tip_amplitude_at_speed_m"]
+                    row["drive_power_at_speed_w"] = linear.drive_power(swimming, waveform)
+                # the seed's energy per distance (eq. 5-13), of the actuators' mechanical work
+                power = float(row.get("drive_power_at_speed_w", row["drive_power_w"]))
+                if speed > 0:  # a fish that does not swim has no work per distance
+                    row["work_per_distance_j_m"] = power / speed
+            checked += [*SWIMMING_KEYS, "tip_amplitude_at_speed_m", "drive_power_at_speed_w"]
         # the periodic response itself: no start-up to settle
         row.update(
             tip_amplitude_periodic_m=row["tip_amplitude_m"],
