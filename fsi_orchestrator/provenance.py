@@ -103,13 +103,31 @@ def case_toml(case: Case) -> str:
     return "\n".join(lines)
 
 
+# the boundary keys each head support does not read: a change to one changes no run
+UNREAD_BY_HEAD = {
+    "clamped": ("pin_x_m", "support_stiffness_n_per_m"),
+    "pinned": ("clamp_length_m", "support_stiffness_n_per_m"),
+    "elastic": ("pin_x_m",),
+    "free": ("clamp_length_m", "pin_x_m", "support_stiffness_n_per_m"),
+}
+
+
 def case_identity(case: Case) -> str:
     """The sections a checkpoint belongs to, and the fluid model (a run resumed under
     another one would mix two fluids' windows under one label), as JSON text."""
     raw = case_dict(case)
     identity = {s: raw[s] for s in IDENTITY_SECTIONS}
     identity["fluid"] = {"model": raw["fluid"]["model"]}
-    return json.dumps(identity, sort_keys=True)
+    return json.dumps(_without_unread(identity), sort_keys=True)
+
+
+def _without_unread(identity: dict[str, Any], head: str | None = None) -> dict[str, Any]:
+    """``identity`` less the boundary keys that ``head`` (default: its own) does not read."""
+    boundary = identity.get("boundary")
+    if not isinstance(boundary, dict):
+        return identity
+    unread = UNREAD_BY_HEAD.get(str(head or boundary.get("head")), ())
+    return {**identity, "boundary": {k: v for k, v in boundary.items() if k not in unread}}
 
 
 def is_new_default(section: str, key: str, value: Any) -> bool:
@@ -126,8 +144,11 @@ def is_new_default(section: str, key: str, value: Any) -> bool:
 def identity_changes(stored: str, current: str, limit: int = 3) -> list[str]:
     """``section.key`` of the first few keys that differ between two identities, over the
     sections the stored one holds (older checkpoints hold no fluid model); a key the stored
-    one lacks counts only away from its default."""
+    one lacks counts only away from its default, and a boundary key the current head support
+    does not read not at all."""
     a, b = json.loads(stored), json.loads(current)
+    head = b.get("boundary", {}).get("head")  # a changed head is a change of its own
+    a, b = _without_unread(a, head), _without_unread(b, head)
     keys = sorted(
         f"{s}.{k}"
         for s in set(a)

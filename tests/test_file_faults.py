@@ -656,11 +656,17 @@ def test_a_checkpoint_written_before_a_key_existed_resumes_while_the_key_is_at_i
     """A checkpoint's case identity holds the keys of its day. A key added later (here
     boundary.pin_x_m), at its default, changes nothing the checkpoint stood for; away from
     its default it does, and so does any key the checkpoint holds."""
-    from fsi_orchestrator.provenance import case_identity, identity_changes
+    from fsi_orchestrator.provenance import (
+        IDENTITY_SECTIONS,
+        case_dict,
+        case_identity,
+        identity_changes,
+    )
 
     case = load_case(ROOT / "cases" / "fixed_head_3Hz")
     current = case_identity(case)
-    older = json.loads(current)
+    raw = case_dict(case)  # as the older version stored it: every boundary key
+    older = {s: raw[s] for s in IDENTITY_SECTIONS} | {"fluid": {"model": "openfoam"}}
     del older["boundary"]["pin_x_m"]
     assert identity_changes(json.dumps(older), current) == []
     pinned = load_case(
@@ -672,3 +678,19 @@ def test_a_checkpoint_written_before_a_key_existed_resumes_while_the_key_is_at_i
     ]
     clamp = load_case(ROOT / "cases" / "fixed_head_3Hz", ["boundary.clamp_length_m=0.02"])
     assert identity_changes(json.dumps(older), case_identity(clamp)) == ["boundary.clamp_length_m"]
+
+
+def test_a_hinged_run_resumes_with_a_changed_key_the_hinge_does_not_read():
+    """boundary.clamp_length_m and support_stiffness_n_per_m hold nothing on a hinge
+    (boundary.head = "pinned"): a change to them changes no run, a change of the hinge's
+    place does."""
+    from fsi_orchestrator.provenance import case_identity, identity_changes
+
+    rig = ROOT / "cases" / "seed" / "thrust_rig"
+    stored = case_identity(load_case(rig))
+    for unread in ("boundary.clamp_length_m=0.03", "boundary.support_stiffness_n_per_m=5e3"):
+        assert identity_changes(stored, case_identity(load_case(rig, [unread]))) == []
+    moved = case_identity(load_case(rig, ["boundary.pin_x_m=0.01"]))
+    assert identity_changes(stored, moved) == ["boundary.pin_x_m"]
+    clamped = case_identity(load_case(rig, ["boundary.head=clamped"]))
+    assert identity_changes(stored, clamped) == ["boundary.clamp_length_m", "boundary.head"]

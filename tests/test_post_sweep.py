@@ -62,9 +62,27 @@ def test_a_sweep_with_uncertainties_is_drawn_with_the_overlay(tmp_path, monkeypa
         writer.writerows(rows)
     (tmp_path / "sweep_case.json").write_text(json.dumps(OPENFOAM_COARSE))
     drawn = []
-    monkeypatch.setattr(post, "overlay_seed", lambda *axes: drawn.append(len(axes)))
+    monkeypatch.setattr(post, "overlay_seed", lambda *args: drawn.append(args[2]))
     target = post.plot_sweep(tmp_path / "sweep.csv", tmp_path)
-    assert target.is_file() and target.stat().st_size > 10_000 and drawn == [2]
+    assert target.is_file() and target.stat().st_size > 10_000 and drawn == ["clamped"]
+
+
+@pytest.mark.parametrize(
+    "head, amplitude_points, rig",
+    [("clamped", 2, True), ("pinned", 0, True), ("free", 0, False), ("elastic", 0, False)],
+)
+def test_the_seed_overlay_follows_how_the_head_is_held(head, amplitude_points, rig):
+    """The 1 Hz tail (Figs. 3.28, 4.8) was the head clamped; the thrust peak and range the
+    rig's stick (Fig. 4.6, compared with the clamped FSI in Sec. 4.3.1); neither a free fish."""
+    import matplotlib.pyplot as plt
+
+    fig, (ax_amp, ax_thrust) = plt.subplots(2, 1)
+    identity = {"case": {"boundary": {"head": head}}}
+    post.overlay_seed(ax_amp, ax_thrust, post.head_support(identity))
+    assert len(ax_amp.lines) == amplitude_points
+    assert bool(ax_thrust.lines or ax_thrust.patches) == rig
+    plt.close(fig)
+    assert post.head_support({"case": {}}) == "clamped"  # the schema's default
 
 
 def test_the_mesh_error_is_measured_at_shared_frequencies_and_interpolated_between():

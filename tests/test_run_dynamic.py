@@ -442,3 +442,23 @@ def test_a_newton_failure_is_told_by_its_type_not_its_words(tmp_path, capsys, mo
         assert run_cli.main([str(case), "--quiet", "--output", str(tmp_path / name)]) == 1
         advised[name] = "--set time.start=rest" in capsys.readouterr().err
     assert advised == {"newton": True, "other": False}
+
+
+def test_a_run_shorter_than_a_period_says_its_mean_thrust_is_a_part_periods(tmp_path, capsys):
+    """A quarter period's mean thrust is not a period's: fsi-run says so in one note and
+    reports the span it averaged over; a sweep's row says "shorter than one period"."""
+    from fishfsi.cli import sweep as sweep_cli
+
+    quarter = ["--set", "fluid.model=potential", "--set", "mesh.level=coarse"]
+    quarter += ["--set", "time.periods=0.25", "--set", "output.vtk=false"]
+    case = str(ROOT / "cases/fixed_head_3Hz")
+    assert run_cli.main([case, *quarter, "--json", "--output", str(tmp_path / "run")]) == 0
+    out, err = capsys.readouterr()
+    summary = json.loads(out)
+    assert summary["thrust_averaged_over_s"] == pytest.approx(0.25 / 3)
+    notes = [line for line in err.splitlines() if "shorter than one period" in line]
+    assert len(notes) == 1 and "time.periods >= 1" in notes[0]
+    args = [case, "--method", "transient", "--frequencies", "3", "--waveforms", "sine"]
+    assert sweep_cli.main([*args, *quarter, "--output", str(tmp_path / "sweep")]) == 0
+    rows = (tmp_path / "sweep" / "sweep.csv").read_text()
+    assert "ok (shorter than one period)" in rows

@@ -140,7 +140,7 @@ def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatc
 
     monkeypatch.setattr(run_cli, "run_dynamic", from_rest)
     args = [str(CASE), "--frequencies", "8", "--waveforms", "sine", "--method", "transient"]
-    args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
+    args += ["--set", "time.periods=1", "--set", "time.steps_per_period=8"]
     assert sweep_cli.main([*args, "--json", "--output", str(tmp_path / "sweep")]) == 0
     rows = json.loads(capsys.readouterr().out)["rows"]
     assert [r["status"] for r in rows] == ["ok (started from rest)"]

@@ -315,13 +315,20 @@ def choose_start(case: Case, solid) -> tuple[Case, str | None]:
         else f"turns the plate by {turn:.0f} deg, further than the fluid mesh follows "
         f"({LEAD_IN_MAX_TURN_DEG:g} deg"
     )
-    note = (
-        f"start: the fast model's periodic orbit {why}: near a wet resonance its amplitude is "
-        f"set by damping it does not know); starting from rest instead, the voltage ramped up "
-        f"over {RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods in all "
+    reason = (
+        f"the fast model's periodic orbit {why}: near a wet resonance its amplitude is set by "
+        "damping it does not know)"
+    )
+    return ramped, from_rest_note(case, ramped, reason)
+
+
+def from_rest_note(case: Case, ramped: Case, reason: str) -> str:
+    """The line that says a run starts from rest instead of on the fast orbit, and why."""
+    return (
+        f"start: {reason}; starting from rest instead, the voltage ramped up over "
+        f"{RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods in all "
         f"({case.time.periods:g} asked for)"
     )
-    return ramped, note
 
 
 def coupled_setup(case: Case, fluid_factory=None):

@@ -90,12 +90,22 @@ def is_original_fish(identity: dict | None) -> bool:
     return geometry.get("kind") == "fish" and geometry.get("preset") == "original"
 
 
-def overlay_seed(ax_amp, ax_thrust) -> None:
-    """The seed's measured and simulated figures the original fish's curves answer to."""
-    ax_amp.plot([1.0], [SEED_FSI_1HZ_MM], "k^", label="seed FSI, 1 Hz square (Fig. 3.28)")
-    ax_amp.plot([1.0], [SEED_EXPERIMENT_1HZ_MM], "ks", label="seed experiment (Fig. 4.8)")
-    ax_thrust.axhspan(0, 1e3 * RIG_READABLE_N, color="0.85", label="rig's readable range")
-    ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
+def head_support(identity: dict | None) -> str:
+    """The sweep's boundary.head (the schema's default, clamped, where the case leaves it)."""
+    return str((identity or {}).get("case", {}).get("boundary", {}).get("head", "clamped"))
+
+
+def overlay_seed(ax_amp, ax_thrust, head: str = "clamped") -> None:
+    """The seed's measured and simulated figures the original fish's curves answer to: the
+    1 Hz tail of its fixed-head experiment and FSI where the head is clamped, the thrust rig's
+    peak and readable range where the head is held (clamped, as the seed's FSI, or hinged, as
+    the rig's stick); none for a free or sprung head."""
+    if head == "clamped":
+        ax_amp.plot([1.0], [SEED_FSI_1HZ_MM], "k^", label="seed FSI, 1 Hz square (Fig. 3.28)")
+        ax_amp.plot([1.0], [SEED_EXPERIMENT_1HZ_MM], "ks", label="seed experiment (Fig. 4.8)")
+    if head in ("clamped", "pinned"):
+        ax_thrust.axhspan(0, 1e3 * RIG_READABLE_N, color="0.85", label="rig's readable range")
+        ax_thrust.axvline(SEED_THRUST_PEAK_HZ, color="k", ls="--", label="measured peak (Fig. 4.6)")
 
 
 _FREQUENCY = key_spec("actuation.frequency_hz")  # a row's frequency, as a case's
@@ -249,7 +259,7 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
         check_mesh_reference(identity, ref_identity, mesh_reference)
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
     if is_original_fish(identity):
-        overlay_seed(ax_amp, ax_thrust)
+        overlay_seed(ax_amp, ax_thrust, head_support(identity))
     table = []
     for waveform in sorted({r["waveform"] for r in rows}):
         sel = sorted(

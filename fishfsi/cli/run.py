@@ -35,9 +35,9 @@ from .common import (
     run_main,
 )
 from .compose import (
-    RAMP_PERIODS,
     build_coupled_run,
     decide_start_flow,
+    from_rest_note,
     is_coupled,
     learned_jacobian_path,
     openfoam_fluid_factory,
@@ -301,11 +301,10 @@ def run_dynamic(
         ramped = ramped_start(case)
         first = str(err).splitlines()[0]
         reason = first.split(": ", 1)[-1].split(";")[0]
-        note = (
-            f"start: the CFD diverged in the lead-in on the fast model's periodic orbit "
-            f"({reason}); starting from rest instead, the voltage ramped up over "
-            f"{RAMP_PERIODS:g} period(s), {ramped.time.periods:g} periods in all "
-            f"({case.time.periods:g} asked for)"
+        note = from_rest_note(
+            case,
+            ramped,
+            f"the CFD diverged in the lead-in on the fast model's periodic orbit ({reason})",
         )
         print(note, file=sys.stderr)
         atomic_write(mark, note + "\n")
@@ -446,10 +445,23 @@ def _run_dynamic(
             file=sys.stderr,
         )
     summary.update(periodic_summary(case, summary))
-    note = settling_note(summary)
-    if note is not None:
-        print(note, file=sys.stderr)
+    for note in (settling_note(summary), partial_period_note(case, summary)):
+        if note is not None:
+            print(note, file=sys.stderr)
     return summary
+
+
+def partial_period_note(case: Case, summary: dict) -> str | None:
+    """A line for stderr when the run is shorter than one drive period: its mean thrust is
+    then a part of a period's, not a period's mean."""
+    span = summary.get("thrust_averaged_over_s")
+    if span is None:
+        return None
+    return (
+        f"note: the run is shorter than one period ({1 / case.actuation.frequency_hz:.4g} s): "
+        f"its mean thrust is the mean over {span:.4g} s, not over a period; for a period's "
+        "mean run at least one period (time.periods >= 1)"
+    )
 
 
 # a run's figures count as periodic when known to this (relative), unless
@@ -566,7 +578,13 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
         thrust = h5["fluid/thrust_n"][:, 0]
         force = h5["fluid/force_n"][:]
         moment = h5["fluid/moment_nm"][:] if "fluid/moment_nm" in h5 else None
-    last = slice(-min(len(thrust), windows_per_period(case)), None)
+    per_period = windows_per_period(case)
+    last = slice(-min(len(thrust), per_period), None)
+    partial = {}
+    if len(thrust) < per_period:  # a run shorter than a period: the mean of what it has
+        partial = {
+            "thrust_averaged_over_s": len(thrust) / (per_period * case.actuation.frequency_hz)
+        }
     turning = {}
     if moment is not None:  # unequal voltages on the two MFCs turn the fish (seed Sec. 4.5)
         turning = {
@@ -579,6 +597,7 @@ def fluid_force_summary(case: Case, results_path: Path) -> dict:
         "mean_thrust_per_period_n": period_means(thrust, windows_per_period(case)),
         "lateral_force_amplitude_n": float(np.ptp(force[last, 2]) / 2),
         **turning,
+        **partial,
     }
 
 

@@ -285,6 +285,8 @@ def transient_sweep(
                         notes.append("its start on the earlier orbit diverged")
                 if "start_from_rest" in summary:
                     notes.insert(0, "started from rest")
+                if "thrust_averaged_over_s" in summary:  # its means are a part period's
+                    notes.append("shorter than one period")
                 status = f"ok ({'; '.join(notes)})" if notes else "ok"
                 (folder / FAILURE_NOTE).unlink(missing_ok=True)  # an earlier attempt's
                 learned = folder
