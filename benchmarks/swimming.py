@@ -192,7 +192,8 @@ def report(rows: dict, seconds: dict, turning: dict, springs: list, coupling: di
             f"({still['swimming_speed_m_s']:.2f}) | {measured_speed[robot]} | "
             f"{at_speed['tip_amplitude_at_speed_m'] * 1e3:.1f} "
             f"({still['tip_amplitude_m'] * 1e3:.1f}) | {at_speed['drive_power_at_speed_w']:.2f} | "
-            f"{at_speed['work_per_distance_j_m']:.2f} | {electrical:.1f} / {useful:.2f} |"
+            f"{at_speed.get('work_per_distance_j_m', float('nan')):.2f} | {electrical:.1f} / "
+            f"{useful:.2f} |"
         )
     lines += [
         "",

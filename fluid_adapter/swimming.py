@@ -227,7 +227,8 @@ def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:
                 f"the mean thrust exceeds the drag up to {MAX_SPEED_M_S:g} m/s: no "
                 "self-propelled speed (is the motion finite?)"
             )
-    return brentq(lambda v: thrust(v) - drag(v), 0.0, upper, xtol=1e-14, rtol=1e-14, maxiter=200)
+    # to 1e-10 m/s: each trial speed may cost a harmonic solve (the motion at that speed)
+    return brentq(lambda v: thrust(v) - drag(v), 0.0, upper, xtol=1e-10, rtol=1e-10, maxiter=200)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -36,6 +36,13 @@ ROOT = Path(__file__).resolve().parents[1]
 CASE = ROOT / "cases/beam_in_liquid"
 
 
+def status(row: dict) -> str:
+    """A row's status less the note a run shorter than one period carries (these tests run
+    half periods)."""
+    text = row["status"].replace("; shorter than one period", "")
+    return text.replace(" (shorter than one period)", "")
+
+
 def test_modal_superposition_matches_the_direct_frequency_response():
     """40 wet modes plus the (undamped) static correction against the direct solve of
     (K - w^2 M + i w C) X = F at 3 and 12 Hz (the beam in FC-3283), both about the
@@ -110,7 +117,7 @@ def test_a_failed_frequency_is_reported_and_the_others_kept(tmp_path, capsys, mo
     args += ["--set", "time.periods=0.5", "--set", "time.steps_per_period=8"]
     assert sweep_cli.main([*args, "--json", "--output", str(out)]) == EXIT_FAILED
     rows = strict_json(capsys.readouterr().out)["rows"]
-    assert [r["status"] for r in rows] == [
+    assert [status(r) for r in rows] == [
         "ok",
         "failed: pimpleFoam diverged in somewhere/openfoam",
         "ok",
@@ -143,7 +150,7 @@ def test_a_point_started_from_rest_is_not_a_failure(tmp_path, capsys, monkeypatc
     args += ["--set", "time.periods=1", "--set", "time.steps_per_period=8"]
     assert sweep_cli.main([*args, "--json", "--output", str(tmp_path / "sweep")]) == 0
     rows = json.loads(capsys.readouterr().out)["rows"]
-    assert [r["status"] for r in rows] == ["ok (started from rest)"]
+    assert [status(r) for r in rows] == ["ok (started from rest)"]
 
 
 @pytest.mark.slow
@@ -184,7 +191,7 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     assert sweep_cli.main([*args, "--json", "--output", str(out)]) == 0
     captured = capsys.readouterr()
     rows = json.loads(captured.out)["rows"]
-    assert [r["status"] for r in rows] == ["ok", "ok (iterated windows)"]
+    assert [status(r) for r in rows] == ["ok", "ok (iterated windows)"]
     assert np.isfinite(rows[1]["tip_amplitude_m"])
     explicit, iqn = CouplingScheme.EXPLICIT_AM, CouplingScheme.IQN_ILS_AM
     assert schemes == [(2.0, explicit, 0), (8.0, explicit, 0), (8.0, iqn, 0)]
@@ -197,7 +204,7 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
     assert schemes == [(8.0, iqn, 0)]
     rows = json.loads(capsys.readouterr().out)["rows"]
-    assert [r["status"] for r in rows] == ["ok", "ok (iterated windows)"]
+    assert [status(r) for r in rows] == ["ok", "ok (iterated windows)"]
     # killed in its explicit run: a checkpoint it cannot continue is run afresh, and when that
     # diverges it is rerun iterated all the same
     (out / "sweep_rows" / "sine_8Hz.json").unlink()
@@ -206,7 +213,7 @@ def test_a_point_whose_single_solve_windows_diverge_is_rerun_iterated(
     schemes.clear()
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
     assert schemes == [(8.0, explicit, 0), (8.0, explicit, 0), (8.0, iqn, 0)]
-    assert json.loads(capsys.readouterr().out)["rows"][1]["status"] == "ok (iterated windows)"
+    assert status(json.loads(capsys.readouterr().out)["rows"][1]) == "ok (iterated windows)"
 
 
 @pytest.mark.slow
@@ -245,7 +252,7 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     assert sweep_cli.main([*args, "--json", "--output", str(out)]) == 0
     captured = capsys.readouterr()
     rows = json.loads(captured.out)["rows"]
-    assert [r["status"] for r in rows] == ["ok", *["ok (6 windows per period)"] * 2]
+    assert [status(r) for r in rows] == ["ok", *["ok (6 windows per period)"] * 2]
     assert [r["windows_per_period"] for r in rows] == [10, 6, 6]
     explicit, iqn = CouplingScheme.EXPLICIT_AM, CouplingScheme.IQN_ILS_AM
     assert runs == [(2.0, explicit, 10, False), (8.0, explicit, 10, False)] + [
@@ -263,7 +270,7 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--resume"]) == 0
     assert runs == [(8.0, explicit, 6, True), (9.0, explicit, 6, True)]
     rows = json.loads(capsys.readouterr().out)["rows"]
-    assert [r["status"] for r in rows[1:]] == ["ok (6 windows per period)"] * 2
+    assert [status(r) for r in rows[1:]] == ["ok (6 windows per period)"] * 2
     # a new launch (another rank, a resumed sweep) learns the count from the finished rows:
     # 9 Hz, lost with its folder, starts where 8 Hz's row says that point ran
     (out / "sweep_rows" / "sine_9Hz.json").unlink()
@@ -276,7 +283,7 @@ def test_a_diverging_point_is_rerun_with_fewer_windows_before_iterating(
     stable_below["8"] = 4
     assert sweep_cli.main([*args, "--json", "--output", str(out), "--overwrite"]) == 0
     rows = json.loads(capsys.readouterr().out)["rows"]
-    assert rows[1]["status"] == "ok (iterated windows)"
+    assert status(rows[1]) == "ok (iterated windows)"
     assert [(r[1], r[2]) for r in runs if r[0] == 8.0][-4:] == [
         (explicit, 10),
         (explicit, 8),
@@ -326,7 +333,7 @@ def test_a_point_started_on_an_earlier_sweeps_orbit_starts_at_the_windows_it_ran
     assert sweep_cli.main(started) == 0
     rows = json.loads(capsys.readouterr().out)["rows"]
     assert runs == [(2.0, 10, True, False), (8.0, 6, True, False)]
-    assert [r["status"] for r in rows] == ["ok", "ok (6 windows per period)"]
+    assert [status(r) for r in rows] == ["ok", "ok (6 windows per period)"]
     assert [r["windows_per_period"] for r in rows] == [10, 6]
     # killed in its run: --resume continues the checkpoint at the count it started with
     (tmp_path / "b" / "sweep_rows" / "sine_8Hz.json").unlink()
@@ -341,8 +348,8 @@ def test_a_point_started_on_an_earlier_sweeps_orbit_starts_at_the_windows_it_ran
     captured = capsys.readouterr()
     assert runs == [(2.0, 10, True, False), (8.0, 6, True, False), (8.0, 6, False, False)]
     assert "running the point again with its usual start" in captured.err
-    status = json.loads(captured.out)["rows"][1]["status"]
-    assert status == "ok (6 windows per period; its start on the earlier orbit diverged)"
+    second = status(json.loads(captured.out)["rows"][1])
+    assert second == "ok (6 windows per period; its start on the earlier orbit diverged)"
     (tmp_path / "b" / "sweep_rows" / "sine_8Hz.json").unlink()
     runs.clear()
     assert sweep_cli.main([*started, "--resume"]) == 0

@@ -97,7 +97,7 @@ def linear_sweep(
             "drive_power_w": linear.drive_power(response, waveform),
             "status": "ok",
         }
-        checked = ["tip_amplitude_m"]
+        checked = ["tip_amplitude_m", "drive_power_w"]
         if thrusts is not None:  # Lighthill's, and the fast model's with the shedding
             row["slender_body_mean_thrust_n"] = float(thrusts[0])
             row["mean_thrust_n"] = float(thrusts[1])
@@ -119,6 +119,7 @@ def linear_sweep(
                 if speed > 0:  # a fish that does not swim has no work per distance
                     row["work_per_distance_j_m"] = power / speed
             checked += [*SWIMMING_KEYS, "tip_amplitude_at_speed_m", "drive_power_at_speed_w"]
+            checked += ["work_per_distance_j_m"]
         # the periodic response itself: no start-up to settle
         row.update(
             tip_amplitude_periodic_m=row["tip_amplitude_m"],
