@@ -2,8 +2,9 @@
 lengths per second, swimming number Sw = V / (f L) (seed eq. 5-15) and turning rate.
 
 The motion is the free fish's linear periodic response about the mean-voltage equilibrium,
-as ``fsi-sweep --method linear`` computes it (its recoil included: the head is free); the
-thrust, drag and yaw balance are :mod:`fluid_adapter.swimming`'s. ``fsi-run`` prints one
+as ``fsi-sweep --method linear`` computes it (its recoil included: the head is free), at each
+speed the balance tries (swimming.speed_coupling; linear.py); the thrust, drag and yaw
+balance are :mod:`fluid_adapter.swimming`'s. ``fsi-run`` prints one
 drive's figures; ``fsi-sweep`` adds them to each frequency's row. docs/swimming.md.
 """
 
