@@ -215,18 +215,39 @@ def speed_loads(
     )
 
 
-def self_propelled_speed(thrust, drag, tolerance_n: float = 1e-12) -> float:
-    """V* >= 0 with thrust(V*) = drag(V*); 0 when the motion gives no thrust at rest."""
+def divergence_speed(loads: SpeedLoads, omegas: NDArray, rigid: int) -> float:
+    """The lowest speed (m/s) at which the load at speed's negative stiffness outgrows the
+    elastic modes' own, w_j^2 + V^2 K (static divergence, elastic block); inf if none. Past
+    it the linear periodic motion at that speed means nothing."""
+    stiffness = loads.stiffness_per_speed_squared[rigid:, rigid:]
+    elastic = np.asarray(omegas, dtype=float)[rigid:] ** 2
+    if stiffness.size == 0:
+        return float("inf")
+    lam = np.linalg.eigvals(-stiffness / elastic[:, None])  # V^2 lam = 1 at divergence
+    real = lam[(np.abs(lam.imag) <= 1e-9 * np.abs(lam).max()) & (lam.real > 0)].real
+    return float(1 / np.sqrt(real.max())) if real.size else float("inf")
+
+
+def self_propelled_speed(
+    thrust, drag, tolerance_n: float = 1e-12, max_speed_m_s: float = MAX_SPEED_M_S
+) -> float:
+    """V* >= 0 with thrust(V*) = drag(V*); 0 when the motion gives no thrust at rest.
+    ``max_speed_m_s``: no trial speed beyond it (the motion's divergence speed)."""
     if not thrust(0.0) > 0:
         return 0.0
-    upper = 0.05
+    upper = min(0.05, max_speed_m_s)
     while thrust(upper) - drag(upper) > 0:
-        upper *= 2
-        if upper > MAX_SPEED_M_S:
-            raise SwimmingError(
-                f"the mean thrust exceeds the drag up to {MAX_SPEED_M_S:g} m/s: no "
-                "self-propelled speed (is the motion finite?)"
+        if upper >= max_speed_m_s:
+            why = (
+                "the plate diverges there: the load at speed outgrows its bending stiffness"
+                if max_speed_m_s < MAX_SPEED_M_S
+                else "is the motion finite?"
             )
+            raise SwimmingError(
+                f"the mean thrust exceeds the drag up to {max_speed_m_s:.3g} m/s: no "
+                f"self-propelled speed ({why})"
+            )
+        upper = min(2 * upper, max_speed_m_s)
     # to 1e-10 m/s: each trial speed may cost a harmonic solve (the motion at that speed)
     return brentq(lambda v: thrust(v) - drag(v), 0.0, upper, xtol=1e-10, rtol=1e-10, maxiter=200)
 

@@ -16,6 +16,8 @@ from fishfsi.cli.swimming import MEASURED, SWIMMING_KEYS
 from fluid_adapter.swimming import (
     BodyDrag,
     FormDrag,
+    SpeedLoads,
+    divergence_speed,
     mean_thrust,
     mirrored_over_half_a_period,
     self_propelled_speed,
@@ -70,6 +72,27 @@ def test_the_load_at_speed_takes_lighthills_power(speed):
     expected = area * speed * 0.5 * np.real(w * np.conj(h_t))
     assert power > 0  # the swimming plate works on the liquid
     assert power == pytest.approx(expected, rel=2e-3)
+
+
+def test_the_divergence_speed_is_where_the_elastic_stiffness_is_used_up():
+    """w_j^2 + V^2 K_jj = 0 for a diagonal K: V_d = min sqrt(w_j^2 / -K_jj) over the elastic
+    modes (here 2, 3 and 4 m/s); a rigid mode (w = 0) and a stiffening K do not count."""
+    omegas = np.array([0.0, 10.0, 20.0, 30.0])
+    k = np.array([-5.0, -((10.0 / 3) ** 2), -((20.0 / 2) ** 2), -((30.0 / 4) ** 2)])
+    loads = SpeedLoads(np.zeros((4, 4)), np.diag(k))
+    assert divergence_speed(loads, omegas, rigid=1) == pytest.approx(2.0, rel=1e-12)
+    stiffening = SpeedLoads(np.zeros((4, 4)), np.diag(-k))
+    assert divergence_speed(stiffening, omegas, rigid=1) == np.inf
+
+
+def test_a_prescribed_speed_past_the_divergence_is_refused_in_one_line(capsys):
+    """The original robot's motion diverges near 2.5 m/s: a flume speed past it gets one line
+    naming the key and a non-zero exit, not a figure of a meaningless motion."""
+    code = run.main([str(CASE), "--json", "--set", "swimming.speed_m_s=5"])
+    out, err = capsys.readouterr()
+    assert code != 0 and out == ""
+    assert len(err.strip().splitlines()) == 1
+    assert "swimming.speed_m_s = 5 is past the plate's divergence speed (2.5" in err
 
 
 def test_skin_friction_lines():

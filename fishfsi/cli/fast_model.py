@@ -94,6 +94,7 @@ class LinearModel:
     tip: int  # the tail tip's node
     speed_loads: SpeedLoads | None = None  # the fluid's load at forward speed, on sweep's modes
     drive_load: NDArray | None = None  # the load of a unit oscillation of the drive (N)
+    divergence_speed_m_s: float = float("inf")  # past it the motion at speed means nothing
 
     def drive_power(self, response: PeriodicResponse, waveform: Waveform) -> float:
         """The mean mechanical power (W) the actuators put into the plate over a period of
@@ -200,9 +201,9 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
         sweep = mean_voltage_modal_sweep(case, model, drive0, x_static, MODES, with_rigid=coupled)
     check_modal_sweep(sweep)
     tip = model.mesh.nearest_node(*model.layout.tip_point)
-    loads = None
+    loads, diverges = None, float("inf")
     if coupled:  # at speed the fluid's load moves the free body's sway and yaw too
-        from fluid_adapter.swimming import speed_loads
+        from fluid_adapter.swimming import divergence_speed, speed_loads
         from solid_adapter.shell import NDOF
 
         midline = midline_nodes(model)
@@ -214,6 +215,7 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
             density_kg_m3=case.fluid.density_kg_m3,
             added_mass_coefficient=case.fluid.added_mass_coefficient,
         )
+        diverges = divergence_speed(loads, sweep.omegas, sweep.rigid)
     return LinearModel(
         case=case,
         model=model,
@@ -222,6 +224,7 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
         tip=tip,
         speed_loads=loads,
         drive_load=harmonic_load(model, drive0, x_static),
+        divergence_speed_m_s=diverges,
     )
 
 

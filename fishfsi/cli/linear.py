@@ -9,6 +9,7 @@ theory on that motion, alone and with the shedding efficiency (fluid.thrust_shed
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -63,6 +64,7 @@ def linear_sweep(
     swim = None
     if case.analysis.kind is AnalysisKind.SWIMMING:  # speed and turning from each motion
         swim = swimming_model(case, model, xs)
+        swim = dataclasses.replace(swim, max_speed_m_s=linear.divergence_speed_m_s)
     pushes = case.fluid.model is not FluidModel.NONE  # in vacuum nothing is pushed
     length = float(np.ptp(model.mesh.nodes[:, 0]))
     rows = []

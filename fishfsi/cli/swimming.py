@@ -51,6 +51,8 @@ class SwimmingModel:
     crossflow_drag_coefficient: float
     prescribed_speed_m_s: float | None
     pressure_thrust: bool = False  # swimming.thrust_model = "pressure"
+    # the motion's divergence speed where it is solved at each speed (swimming.speed_coupling)
+    max_speed_m_s: float = float("inf")
 
     def row(self, times: NDArray, history: Callable[[float], NDArray], frequency_hz: float) -> dict:
         """The swimming columns of one drive from the midline history at a forward speed,
@@ -58,6 +60,8 @@ class SwimmingModel:
         may repeat the start); the same array at every speed where the motion is taken as
         unchanged by the speed."""
         from fluid_adapter.swimming import (
+            MAX_SPEED_M_S,
+            SwimmingError,
             mean_pressure_thrust,
             mean_thrust,
             self_propelled_speed,
@@ -82,7 +86,15 @@ class SwimmingModel:
             thrust = lambda v: thrust_of(x, b, motion(v) + slip * r, dt, v, **fluid)  # noqa: E731
             speed = self.prescribed_speed_m_s
             if speed is None:
-                speed = self_propelled_speed(thrust, self.drag.total)
+                limit = min(self.max_speed_m_s, MAX_SPEED_M_S)
+                speed = self_propelled_speed(thrust, self.drag.total, max_speed_m_s=limit)
+            elif speed >= self.max_speed_m_s:
+                raise SwimmingError(
+                    f"swimming.speed_m_s = {speed:g} is past the plate's divergence speed "
+                    f"({self.max_speed_m_s:.3g} m/s), where the load at speed outgrows its "
+                    "bending stiffness and the linear motion means nothing: give a lower "
+                    "speed, or swimming.speed_coupling = false for the still liquid's motion"
+                )
             return speed, thrust(speed)
 
         slip, speed, thrust = 0.0, 0.0, 0.0
