@@ -239,7 +239,9 @@ def self_propelled_speed(
     while thrust(upper) - drag(upper) > 0:
         if upper >= max_speed_m_s:
             why = (
-                "the plate diverges there: the load at speed outgrows its bending stiffness"
+                "the plate diverges there: the load at speed outgrows the stiffness of its "
+                "modes, the plate's and its supports'; swimming.speed_coupling = false takes "
+                "the still liquid's motion at every speed"
                 if max_speed_m_s < MAX_SPEED_M_S
                 else "is the motion finite?"
             )

@@ -95,6 +95,21 @@ def test_a_prescribed_speed_past_the_divergence_is_refused_in_one_line(capsys):
     assert "swimming.speed_m_s = 5 is past the plate's divergence speed (2.5" in err
 
 
+def test_a_turn_tighter_than_the_body_at_a_low_prescribed_speed_says_so(capsys):
+    """At a flume's 0.05 m/s the seed's right-turn drive lands on a turn of about 180 deg/s,
+    a radius of 16 mm on a 167 mm body, where the slender-body turning balance does not hold:
+    fsi-run says so in one note (the row's status carries it)."""
+    sets = ["--set", RIGHT_TURN, "--set", "swimming.speed_m_s=0.05"]
+    assert run.main([str(CASE), "--json", *sets]) == 0
+    out, err = capsys.readouterr()
+    summary = json.loads(out)
+    radius = 0.05 / np.radians(abs(summary["turning_rate_deg_s"]))
+    assert radius < 0.167
+    assert [line for line in err.splitlines() if line.startswith("note:")] == [
+        "note: turning radius below the body length: outside the turning model (turning_rate_deg_s)"
+    ]
+
+
 def test_skin_friction_lines():
     assert skin_friction_coefficient(1e6, "ittc-1957") == pytest.approx(0.075 / 16)
     assert skin_friction_coefficient(1e5, "blasius") == pytest.approx(1.328 / np.sqrt(1e5))

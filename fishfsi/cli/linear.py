@@ -129,6 +129,12 @@ def linear_sweep(
             periodic=True,
         )
         row["status"] = not_finite_status(row, checked)
+        if (
+            swim is not None
+            and row["status"] == "ok"
+            and _turns_tighter_than_its_length(row, length)
+        ):
+            row["status"] = f"ok ({TIGHT_TURN})"
         rows.append(row)
         if on_row is not None:
             on_row(point_name(waveform, f), row, time.perf_counter() - start)
@@ -140,7 +146,7 @@ def linear_sweep(
             f"note: the linear response exceeds a fifth of the plate's {1e3 * length:.0f} mm at "
             f"{len(large)} point(s) ({1e3 * amplitude:.0f} mm at {worst['frequency_hz']:g} Hz "
             f"{worst['waveform']}): past small deflections, near a lightly damped resonance; "
-            "--method transient gives the large-deflection answer",
+            "a transient run (fsi-sweep --method transient) gives the large-deflection answer",
             file=sys.stderr,
         )
     return rows
@@ -159,6 +165,17 @@ def _motion_at_speed(linear, frequency_hz: float, waveform: Waveform, still):
         return known[speed]
 
     return at
+
+
+# a turn tighter than the body's length: the slender-body turning balance (quasi-steady, the
+# body's sections in a nearly straight stream) does not hold there; at a low prescribed speed
+# an asymmetric drive lands on such a root
+TIGHT_TURN = "turning radius below the body length: outside the turning model"
+
+
+def _turns_tighter_than_its_length(row: dict, length: float) -> bool:
+    rate = abs(np.radians(row.get("turning_rate_deg_s", 0.0)))
+    return bool(rate > 0 and row["swimming_speed_m_s"] / rate < length)
 
 
 def _history_at_speed(at_speed, dofs: np.ndarray, times: np.ndarray, speed: float) -> np.ndarray:
@@ -184,7 +201,9 @@ def swimming_summary(case: Case) -> dict:
     a = case.actuation
     rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
     row = rows[0]
-    if row["status"] != "ok":
+    if row["status"] == f"ok ({TIGHT_TURN})":
+        print(f"note: {TIGHT_TURN} (turning_rate_deg_s)", file=sys.stderr)
+    elif row["status"] != "ok":
         raise SweepError(f"swimming: {row['status']}")
     summary = {k: row[k] for k in SWIMMING_KEYS}
     summary.update({k: v for k, v in row.items() if k not in summary and k != "status"})

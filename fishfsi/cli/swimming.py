@@ -91,8 +91,8 @@ class SwimmingModel:
             elif speed >= self.max_speed_m_s:
                 raise SwimmingError(
                     f"swimming.speed_m_s = {speed:g} is past the plate's divergence speed "
-                    f"({self.max_speed_m_s:.3g} m/s), where the load at speed outgrows its "
-                    "bending stiffness and the linear motion means nothing: give a lower "
+                    f"({self.max_speed_m_s:.3g} m/s), where the load at speed outgrows the "
+                    "stiffness of its modes and the linear motion means nothing: give a lower "
                     "speed, or swimming.speed_coupling = false for the still liquid's motion"
                 )
             return speed, thrust(speed)
