@@ -362,3 +362,22 @@ def test_pressure_thrust_is_lighthills_less_the_edge_suction():
     got = mean_pressure_thrust(x, b, h, t[1], speed, density_kg_m3=rho)
     assert got == pytest.approx(expected, rel=1e-3)
     assert abs(got) > 0.01  # not a vanishing case
+
+
+def test_a_point_without_a_self_propelled_speed_fails_alone(monkeypatch):
+    """A frequency whose speed balance has no root (here made so at 18 Hz) is a failed row
+    naming why; the sweep's other frequencies keep their figures."""
+    from fishfsi.cli import swimming as swimming_cli
+    from fluid_adapter.swimming import SwimmingError
+
+    real = swimming_cli.SwimmingModel.row
+
+    def no_root_at_18(self, times, history, frequency_hz):
+        if frequency_hz == 18.0:
+            raise SwimmingError("the mean thrust exceeds the drag up to 2.51 m/s")
+        return real(self, times, history, frequency_hz)
+
+    monkeypatch.setattr(swimming_cli.SwimmingModel, "row", no_root_at_18)
+    rows = sweep.linear_sweep(load_case(CASE), [6.0, 18.0], [Waveform.SQUARE])
+    assert rows[0]["status"] == "ok" and rows[0]["swimming_speed_m_s"] > 0
+    assert rows[1]["status"] == "failed: the mean thrust exceeds the drag up to 2.51 m/s"

@@ -55,6 +55,7 @@ def linear_sweep(
     if not jobs:
         return []
     from fluid_adapter.slender_body import mean_thrust_from_shell
+    from fluid_adapter.swimming import SwimmingError
 
     linear = linear_model(case)
     model, tip = linear.model, linear.tip
@@ -109,7 +110,14 @@ def linear_sweep(
             at_speed = _motion_at_speed(linear, f, waveform, response)
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 history = partial(_history_at_speed, at_speed, midline * 5 + 2, times)
-                row.update(swim.row(times, history, f))
+                try:
+                    row.update(swim.row(times, history, f))
+                except SwimmingError as err:  # this point's: the others go on
+                    row["status"] = f"failed: {err}"
+                    rows.append(row)
+                    if on_row is not None:
+                        on_row(point_name(waveform, f), row, time.perf_counter() - start)
+                    continue
                 speed = float(row["swimming_speed_m_s"])
                 if linear.speed_loads is not None:  # the tail's swing while it swims
                     swimming = at_speed(speed)
