@@ -114,20 +114,8 @@ def linear_sweep(
                     row.update(swim.row(times, history, f))
                 except SwimmingError as err:  # this point's: the others go on
                     row["status"] = f"failed: {err}"
-                    rows.append(row)
-                    if on_row is not None:
-                        on_row(point_name(waveform, f), row, time.perf_counter() - start)
-                    continue
-                speed = float(row["swimming_speed_m_s"])
-                if linear.speed_loads is not None:  # the tail's swing while it swims
-                    swimming = at_speed(speed)
-                    tip_at_speed = swimming.dof_history(np.array([tip * 5 + 2]), times)
-                    row["tip_amplitude_at_speed_m"] = float(np.ptp(tip_at_speed) / 2)
-                    row["drive_power_at_speed_w"] = linear.drive_power(swimming, waveform)
-                # the seed's energy per distance (eq. 5-13), of the actuators' mechanical work
-                power = float(row.get("drive_power_at_speed_w", row["drive_power_w"]))
-                if speed > 0:  # a fish that does not swim has no work per distance
-                    row["work_per_distance_j_m"] = power / speed
+                else:
+                    row.update(_at_the_speed(linear, at_speed, row, tip, times, waveform))
             checked += [*SWIMMING_KEYS, "tip_amplitude_at_speed_m", "drive_power_at_speed_w"]
             checked += ["work_per_distance_j_m"]
         # the periodic response itself: no start-up to settle
@@ -158,6 +146,23 @@ def linear_sweep(
             file=sys.stderr,
         )
     return rows
+
+
+def _at_the_speed(linear, at_speed, row: dict, tip: int, times, waveform: Waveform) -> dict:
+    """The motion's figures while the fish swims: its tail swing and the actuators' power at
+    the speed (where the motion is the one at the speed), and the work per distance."""
+    speed = float(row["swimming_speed_m_s"])
+    found = {}
+    if linear.speed_loads is not None:
+        swimming = at_speed(speed)
+        tip_at_speed = swimming.dof_history(np.array([tip * 5 + 2]), times)
+        found["tip_amplitude_at_speed_m"] = float(np.ptp(tip_at_speed) / 2)
+        found["drive_power_at_speed_w"] = linear.drive_power(swimming, waveform)
+    # the seed's energy per distance (eq. 5-13), of the actuators' mechanical work
+    power = float(found.get("drive_power_at_speed_w", row["drive_power_w"]))
+    if speed > 0:  # a fish that does not swim has no work per distance
+        found["work_per_distance_j_m"] = power / speed
+    return found
 
 
 def _motion_at_speed(linear, frequency_hz: float, waveform: Waveform, still):
