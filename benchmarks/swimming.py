@@ -4,7 +4,7 @@ seed's asymmetric drives, and each curve's run time (target <= 1 min).
 
     python benchmarks/swimming.py [--write-docs]
 
-``--write-docs`` replaces the generated part of docs/swimming.md. About 8 min on 2 cores.
+``--write-docs`` replaces the generated part of docs/swimming.md. About 10 min on 2 cores.
 """
 
 from __future__ import annotations
@@ -87,6 +87,7 @@ SEED_WORK_PER_DISTANCE_J_M = {
 # serial's top speeds, the integrative's turn
 MEASURED_AT_HZ = {"original": 18.0, "serial": 25.0, "integrative": 15.0}
 STILL_MOTION = "swimming.speed_coupling=false"
+STRIP = "swimming.section_added_mass=strip"  # elongated-body theory's own rho pi b^2
 
 
 def motion_at_speed_against_still() -> dict:
@@ -130,7 +131,7 @@ def head_springs() -> list[tuple[float | None, dict, dict]]:
         )
         by_model = {
             m: swimming_summary(
-                load_case(folder, [*base, *held, f"swimming.thrust_model={m}", STILL_MOTION])
+                load_case(folder, [*base, *held, f"swimming.thrust_model={m}", STILL_MOTION, STRIP])
             )
             for m in ("lighthill", "pressure")
         }
@@ -139,7 +140,41 @@ def head_springs() -> list[tuple[float | None, dict, dict]]:
     return found
 
 
-def report(rows: dict, seconds: dict, turning: dict, springs: list, coupling: dict) -> str:
+def strip_against_potential() -> dict:
+    """Each robot's 3D potential added mass over the strip theory's (rho pi b^2 per length)
+    on its first two wet bending modes, free in the tank, and its square-wave speed curve
+    with the strip's own added mass (swimming.section_added_mass = "strip")."""
+    import numpy as np
+
+    from fishfsi.cli.fast_model import linear_model, without_cfd
+    from fluid_adapter.strip import strip_added_mass
+    from solid_adapter.shell import NDOF
+    from solid_adapter.solvers import mode_kind
+
+    found = {}
+    for robot, (folder, base) in ROBOTS.items():
+        case = load_case(folder, [*base, STRIP])
+        linear = linear_model(without_cfd(case))
+        model, sweep = linear.model, linear.sweep
+        strip = strip_added_mass(model, case.fluid.density_kg_m3).matrix
+        ratios = []
+        for j in range(sweep.rigid, len(sweep.omegas)):
+            shape = sweep.shapes[j]
+            if mode_kind(model, shape) != "bending":
+                continue
+            z = shape[2::NDOF]
+            ratio = float(shape @ (model.added_mass @ shape) / (z @ strip @ z))
+            ratios.append((sweep.omegas[j] / (2 * np.pi), ratio))
+            if len(ratios) == 2:
+                break
+        found[robot] = (ratios, linear_sweep(case, FREQUENCIES, [Waveform.SQUARE]))
+        print(f"{robot}: 3D / strip {ratios[0][1]:.2f}", flush=True)
+    return found
+
+
+def report(
+    rows: dict, seconds: dict, turning: dict, springs: list, coupling: dict, strip: dict
+) -> str:
     lines = [
         START,
         "",
@@ -224,6 +259,29 @@ def report(rows: dict, seconds: dict, turning: dict, springs: list, coupling: di
         )
     lines += [
         "",
+        "The 3D potential flow's added mass against the strip theory's (free, in the tank): "
+        "phi^T M_3D phi / phi^T M_strip phi on each robot's first two wet bending modes, the "
+        "strip with rho pi b^2 (gamma = 1). The first is the gamma of `swimming."
+        'section_added_mass = "matched"` (the default); the speeds beside it are the '
+        "square wave's with it and with `--set swimming.section_added_mass=strip` (gamma = 1):",
+        "",
+        "| robot | 3D / strip, 1st bending (f [Hz]) | 2nd bending (f [Hz]) | speed at the "
+        "measured f, matched / strip [m/s] | peak speed, strip [m/s] at [Hz] |",
+        "|---|---|---|---|---|",
+    ]
+    for robot, (ratios, curve) in strip.items():
+        (f1, r1), (f2, r2) = ratios
+        f = MEASURED_AT_HZ[robot]
+        matched = {r["frequency_hz"]: r["swimming_speed_m_s"] for r in rows[robot, "square"]}
+        at = {r["frequency_hz"]: r["swimming_speed_m_s"] for r in curve}
+        best = max(curve, key=lambda r: r["swimming_speed_m_s"])
+        lines.append(
+            f"| {robot} | {r1:.2f} ({f1:.1f}) | {r2:.2f} ({f2:.1f}) | "
+            f"{matched.get(f, float('nan')):.2f} / {at.get(f, float('nan')):.2f} at {f:g} Hz "
+            f"| {best['swimming_speed_m_s']:.2f} at {best['frequency_hz']:g} |"
+        )
+    lines += [
+        "",
         f"Per speed curve ({len(FREQUENCIES)} frequencies, 2-30 Hz) " + _timing(seconds),
         "",
         END,
@@ -245,7 +303,14 @@ def write_docs(text: str) -> None:
 
 def main(argv: list[str]) -> None:
     rows, seconds = curves()
-    text = report(rows, seconds, turns(), head_springs(), motion_at_speed_against_still())
+    text = report(
+        rows,
+        seconds,
+        turns(),
+        head_springs(),
+        motion_at_speed_against_still(),
+        strip_against_potential(),
+    )
     print(text)
     if "--write-docs" in argv:
         write_docs(text)

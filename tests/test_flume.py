@@ -147,7 +147,9 @@ def test_the_flume_case_runs_its_fast_model_at_the_flume_speed():
 # with the fast model's motion of this electrode spacing in still liquid: the fast side
 # compares on that motion too
 CFD_PLATE_FORCE_N = {0.05: 0.1150, 0.8: -0.2442}
-FLUME_MOTION = ["actuation.electrode_spacing_m=0.514e-3", "swimming.speed_coupling=false"]
+# with elongated-body theory's own added mass per length, rho pi b^2, as the tables were made
+STRIP = "swimming.section_added_mass=strip"
+FLUME_MOTION = ["actuation.electrode_spacing_m=0.514e-3", "swimming.speed_coupling=false", STRIP]
 STILL_MOTION = "swimming.speed_coupling=false"  # the motion in still liquid at every speed
 
 
@@ -176,11 +178,11 @@ def test_the_free_original_robots_speed_with_either_thrust_model():
 
     swim = ROOT / "cases" / "swim_original_18Hz"
     pressure = swimming_summary(
-        load_case(swim, overrides=["swimming.thrust_model=pressure", STILL_MOTION])
+        load_case(swim, overrides=["swimming.thrust_model=pressure", STILL_MOTION, STRIP])
     )
     assert pressure["thrust_at_speed_n"] == pressure["pressure_thrust_at_speed_n"]
     assert pressure["swimming_speed_m_s"] == pytest.approx(0.72, rel=0.10)
-    lighthill = swimming_summary(load_case(swim, overrides=[STILL_MOTION]))
+    lighthill = swimming_summary(load_case(swim, overrides=[STILL_MOTION, STRIP]))
     assert lighthill["swimming_speed_m_s"] > 1.8 * 0.72
 
 
@@ -246,8 +248,8 @@ def test_a_head_on_stiff_springs_makes_the_pressure_share_swim_faster():
     from fishfsi.cli.linear import swimming_summary
 
     swim = ROOT / "cases" / "swim_original_18Hz"
-    held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4", STILL_MOTION]
-    pressure = ["swimming.thrust_model=pressure", STILL_MOTION]
+    held = ["boundary.head=elastic", "boundary.support_stiffness_n_per_m=1e4", STILL_MOTION, STRIP]
+    pressure = ["swimming.thrust_model=pressure", STILL_MOTION, STRIP]
     row = swimming_summary(load_case(swim, overrides=[*held, "swimming.thrust_model=pressure"]))
     free = swimming_summary(load_case(swim, overrides=pressure))
     assert row["swimming_speed_m_s"] == pytest.approx(1.30, abs=0.02)

@@ -16,7 +16,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fsi_orchestrator.case import Case
-from fsi_orchestrator.case.schema import AnalysisKind, FluidDomain, FluidModel, Waveform
+from fsi_orchestrator.case.schema import (
+    AnalysisKind,
+    FluidDomain,
+    FluidModel,
+    SectionAddedMass,
+    Waveform,
+)
 
 if TYPE_CHECKING:
     from fluid_adapter.swimming import SpeedLoads
@@ -95,6 +101,8 @@ class LinearModel:
     speed_loads: SpeedLoads | None = None  # the fluid's load at forward speed, on sweep's modes
     drive_load: NDArray | None = None  # the load of a unit oscillation of the drive (N)
     divergence_speed_m_s: float = float("inf")  # past it the motion at speed means nothing
+    # gamma of the swimming model's A = rho pi b^2 gamma (swimming.section_added_mass)
+    section_added_mass_coefficient: float = 1.0
 
     def drive_power(self, response: PeriodicResponse, waveform: Waveform) -> float:
         """The mean mechanical power (W) the actuators put into the plate over a period of
@@ -202,6 +210,7 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
     check_modal_sweep(sweep)
     tip = model.mesh.nearest_node(*model.layout.tip_point)
     loads, diverges = None, float("inf")
+    gamma = section_added_mass_coefficient(case, model, sweep)
     if coupled:  # at speed the fluid's load moves the free body's sway and yaw too
         from fluid_adapter.swimming import divergence_speed, speed_loads
         from solid_adapter.shell import NDOF
@@ -213,7 +222,7 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
             model.layout.height(xs) / 2,
             sweep.shapes[:, midline * NDOF + 2],
             density_kg_m3=case.fluid.density_kg_m3,
-            added_mass_coefficient=case.fluid.added_mass_coefficient,
+            added_mass_coefficient=gamma,
         )
         diverges = divergence_speed(loads, sweep.omegas, sweep.rigid)
     return LinearModel(
@@ -225,7 +234,41 @@ def linear_model(case: Case, model: ShellModel | None = None) -> LinearModel:
         speed_loads=loads,
         drive_load=harmonic_load(model, drive0, x_static),
         divergence_speed_m_s=diverges,
+        section_added_mass_coefficient=gamma,
     )
+
+
+def section_added_mass_coefficient(case: Case, model, sweep) -> float:
+    """gamma of the swimming model's added mass per length A = rho pi b^2 gamma: the case's
+    fluid.added_mass_coefficient, or (swimming.section_added_mass = "matched") the ratio of
+    the fluid model's added mass to the strip theory's on the first wet bending mode. The
+    strip theory holds where the bending wave is long against the plate's height; the
+    robots' are about as long, and the 3D flow carries 0.25-0.42 of the strip's."""
+    from fluid_adapter.strip import strip_added_mass
+    from solid_adapter.shell import NDOF
+    from solid_adapter.solvers import mode_kind
+
+    gamma = case.fluid.added_mass_coefficient
+    if (
+        case.analysis.kind is not AnalysisKind.SWIMMING
+        or case.swimming.section_added_mass is SectionAddedMass.STRIP
+        or model.added_mass is None
+    ):
+        return gamma
+    strip = strip_added_mass(model, case.fluid.density_kg_m3).matrix
+    midline = midline_nodes(model)
+    xs = model.mesh.nodes[midline, 0]
+    for j in range(sweep.rigid, len(sweep.omegas)):
+        shape = sweep.shapes[j]
+        if mode_kind(model, shape) != "bending":
+            continue
+        w = shape[midline * NDOF + 2]
+        straight = np.polyval(np.polyfit(xs, w, 1), xs)
+        if np.linalg.norm(w - straight) < 0.2 * np.linalg.norm(w):
+            continue  # a head on springs: sway and yaw of a body that hardly bends
+        z = shape[2::NDOF]
+        return float(shape @ (model.added_mass @ shape)) / float(z @ strip @ z)
+    return gamma
 
 
 def speed_coupled(case: Case) -> bool:

@@ -134,6 +134,7 @@ class SwimmingModel:
             "reynolds_number": speed * length / self.drag.kinematic_viscosity_m2_s,
             "slip_deg": float(np.degrees(turn.slip_rad)),
             "yaw_drive_moment_nm": turn.drive_moment_nm,
+            "section_added_mass_coefficient": self.added_mass_coefficient,
         }
 
 

@@ -63,6 +63,11 @@ class ThrustModel(StrEnum):
     PRESSURE = "pressure"  # its share carried by the pressure: no suction at sharp edges
 
 
+class SectionAddedMass(StrEnum):
+    MATCHED = "matched"  # rho pi b^2 scaled to the 3D flow's on the first wet bending mode
+    STRIP = "strip"  # rho pi b^2 fluid.added_mass_coefficient: elongated-body theory as it is
+
+
 class Integrator(StrEnum):
     GENERALIZED_ALPHA = "generalized-alpha"
     NEWMARK = "newmark"  # average acceleration (trapezoidal rule)
@@ -947,6 +952,14 @@ class Swimming:
         "of the sections' momentum beyond the still liquid's added mass) back into the "
         "structure, so the motion is the one at the speed: its wake takes energy and damps "
         "the tail. false: the motion in still liquid at every speed (docs/swimming.md).",
+    )
+    section_added_mass: SectionAddedMass = param(
+        SectionAddedMass.MATCHED,
+        "Added mass per length A = rho pi b^2 gamma of the thrust, the turning and the load at "
+        "speed: matched (gamma such that the strip theory carries the case's 3D potential "
+        "added mass on the first wet bending mode: 0.25-0.42 for the seed's robots, whose "
+        "bending waves are about as long as the plate is high) or strip (gamma = "
+        "fluid.added_mass_coefficient, elongated-body theory as it is; docs/swimming.md).",
     )
     crossflow_drag_coefficient: float = param(
         1.2,
