@@ -190,6 +190,10 @@ def test_resume_evaluates_again_a_design_whose_record_lost_its_figures(finished,
             ("points = 3", 'points = 3\nevaluation = "linear"', "tip_amplitude_m", "tip_max_abs_m"),
             "method.evaluation",
         ),
+        (
+            ('quantity = "tip_amplitude_m"', 'quantity = "swimming_speed_m_s"'),
+            "needs a swimming base case",
+        ),
     ],
 )
 def test_bad_input_is_one_line_naming_it(tmp_path, capsys, change, named):
@@ -314,3 +318,44 @@ def test_a_rerun_into_a_folder_holding_evaluations_is_refused_unless_overwrite(
     copy = tmp_path / "copy"
     shutil.copytree(out, copy)
     assert design_cli.main([str(folder), "--output", str(copy), "--overwrite", "--quiet"]) == 0
+
+
+SWIM = ROOT / "cases/swim_original_18Hz"
+SWIM_STUDY = f"""
+[base]
+case = "{SWIM}"
+overrides = ["mesh.level=coarse"]
+
+[[parameters]]
+key = "actuation.frequency_hz"
+low = 14.0
+high = 18.0
+
+[objective]
+quantity = "swimming_speed_m_s"
+sense = "max"
+
+[method]
+kind = "one-at-a-time"
+points = 2
+"""
+
+
+def test_a_swimming_study_evaluates_fsi_runs_swimming_figures(tmp_path, capsys):
+    """Reference: fsi-run's summary of the swimming case (swimming_summary) at 14 and 18 Hz."""
+    from fishfsi.cli.linear import swimming_summary
+
+    study = write_study(tmp_path / "swim", SWIM_STUDY)
+    summary = run_json(capsys, str(study), "--output", str(tmp_path / "out"))
+    rows = rows_of(tmp_path / "out")
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    for row in rows:
+        f = float(row["actuation.frequency_hz"])
+        case = load_case(SWIM, ["mesh.level=coarse", f"actuation.frequency_hz={f!r}"])
+        expected = swimming_summary(case)["swimming_speed_m_s"]
+        assert float(row["swimming_speed_m_s"]) == pytest.approx(expected, rel=1e-9)
+    assert summary["best"]["parameters"]["actuation.frequency_hz"] == 18.0  # the faster
+    transient = SWIM_STUDY.replace("points = 2", 'points = 2\nevaluation = "transient"')
+    bad = write_study(tmp_path / "bad", transient)
+    assert design_cli.main([str(bad), "--output", str(tmp_path / "bad_out")]) == 2
+    assert "method.evaluation" in capsys.readouterr().err

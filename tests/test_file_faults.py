@@ -384,6 +384,26 @@ def test_a_rerun_into_a_folder_holding_results_is_refused_unless_overwrite(done,
     assert not stale.exists()
 
 
+def test_a_modal_run_into_a_folder_holding_a_run_is_refused_unless_overwrite(done, capsys):
+    """A modal, static or swimming run keeps only its summary.json: it replaced an earlier
+    run's summary beside that run's results.h5 without a word."""
+    case, out = done
+    before = (out / "summary.json").read_bytes()
+    modal = ("--output", out, "--set", "analysis.kind=modal")
+    code, lines = run(capsys, case, *modal)
+    assert code == 2
+    one_line_naming(lines, out, "holds an earlier run", "--overwrite")
+    assert (out / "summary.json").read_bytes() == before
+    code, lines = run(capsys, case, *modal, "--resume")
+    assert code == 2 and "--resume: a modal run keeps no checkpoint" in lines[0]
+    code, lines = run(capsys, case, *modal, "--overwrite")
+    assert code == 0, lines
+    assert "dry_hz" in json.loads((out / "summary.json").read_text())
+    assert not (out / "results.h5").exists() and not (out / "checkpoint.h5").exists()
+    code, lines = run(capsys, case, *modal)  # its own summary is an earlier run too
+    assert code == 2 and "summary.json" in lines[0]
+
+
 def test_a_nan_result_never_exits_zero(done, capsys, monkeypatch):
     case, out = done
     with h5py.File(out / "results.h5", "a") as h5:

@@ -179,6 +179,12 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
             "sweep.csv, line 2: tip_amplitude_m = 'inf' is not finite for a point whose status "
             "is 'ok'",
         ),
+        (  # a drawn swimming figure
+            "waveform,frequency_hz,tip_amplitude_m,swimming_speed_m_s,status\n"
+            "square,18,0.007,nan,ok\n",
+            "sweep.csv, line 2: swimming_speed_m_s = 'nan' is not finite for a point whose "
+            "status is 'ok'",
+        ),
         (
             "waveform,frequency_hz,tip_amplitude_m,status\nsine,-3,0.01,ok\n",
             "sweep.csv, line 2: frequency_hz = '-3' is outside the drive's 0.01..1000 Hz "

@@ -48,7 +48,7 @@ from .common import (  # noqa: E402
     save_figure,
 )
 from .outputs import first_not_finite  # noqa: E402
-from .swimming import plot_swimming_sweep  # noqa: E402
+from .swimming import SWIMMING_KEYS, plot_swimming_sweep  # noqa: E402
 
 
 def _thrust(row: dict) -> float:
@@ -124,6 +124,8 @@ class PostError(ValueError):
 
 SWEEP_COLUMNS = ("waveform", "frequency_hz", "tip_amplitude_m")  # every sweep writes these
 TEXT_COLUMNS = ("waveform", "status", "thrust_source", "periodic")
+# drawn where a sweep has them: finite in every row whose status is ok
+DRAWN_COLUMNS = ("mean_thrust_n", *SWIMMING_KEYS)
 
 
 def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
@@ -156,7 +158,8 @@ def read_sweep(csv_path: Path) -> tuple[list[dict], dict | None]:
                 raise PostError(
                     f"{csv_path}, line {line}: {key} = {text!r} is not a number"
                 ) from None
-            if key in needed and not np.isfinite(value):
+            drawn = ok and key in DRAWN_COLUMNS
+            if (key in needed or drawn) and not np.isfinite(value):
                 raise PostError(
                     f"{csv_path}, line {line}: {key} = {text!r} is not finite for a point "
                     f"whose status is {row.get('status', 'ok')!r}"

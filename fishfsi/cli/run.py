@@ -20,7 +20,7 @@ from fsi_orchestrator.case.timing import case_schedule, windows_per_period
 from fsi_orchestrator.loop import OutputSettings, Schedule, StopRule, WindowLoop
 from fsi_orchestrator.periodic import summary_fields as periodic_fields
 from fsi_orchestrator.provenance import case_identity, run_attributes
-from fsi_orchestrator.results import CHECKPOINT_FILE, ResultsFile
+from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE, ResultsFile
 from solid_adapter.solvers import NewtonNotConverged
 
 from .common import (
@@ -704,14 +704,13 @@ def _body(args: argparse.Namespace) -> int:
     # a dynamic run keeps its summary beside results.h5; another kind only where --output
     # asks for a folder (a modal or static case's answer is the summary alone)
     keep = args.output is not None or case.analysis.kind is AnalysisKind.DYNAMIC
+    replaced: list[str] = []
     if keep and case.analysis.kind is not AnalysisKind.DYNAMIC:
-        try:  # refused before the work, as a dynamic run's folder is
-            output.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise CaseError(cannot_write(output, err)) from None
-        refuse_unwritable(output, (RUN_SUMMARY_FILE,))
+        replaced = _refuse_an_earlier_run(output, case.analysis.kind, args)
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
+    for name in replaced:  # a dynamic run's files, which this summary does not describe
+        (output / name).unlink(missing_ok=True)
     if keep:
         path = output / RUN_SUMMARY_FILE
         try:
@@ -724,6 +723,36 @@ def _body(args: argparse.Namespace) -> int:
                 f"{path}: cannot write the summary ({err.strerror or err}); {kept}"
             ) from None
     return EXIT_OK
+
+
+def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Namespace) -> list[str]:
+    """A modal, static or swimming run's --output, before the work, as a dynamic run's is: a
+    folder it cannot write, or one holding an earlier run without --overwrite, is refused in
+    one line. Such a run has no checkpoint to --resume. Returns the earlier dynamic run's
+    files that --overwrite replaces (removed once the new summary is computed)."""
+    from .flume import FLUME_FILE
+
+    if args.resume:
+        raise CaseError(
+            f"--resume: a {kind.value} run keeps no checkpoint to continue; run it again "
+            "(with --overwrite to replace its --output)"
+        )
+    try:
+        output.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CaseError(cannot_write(output, err)) from None
+    held = [
+        n
+        for n in (RUN_SUMMARY_FILE, RESULTS_FILE, CHECKPOINT_FILE, FLUME_FILE)
+        if (output / n).exists()
+    ]
+    if held and not args.overwrite:
+        raise CaseError(
+            f"--output {output}: holds an earlier run ({', '.join(held)}); write elsewhere "
+            "with --output, or replace it with --overwrite"
+        )
+    refuse_unwritable(output, (RUN_SUMMARY_FILE,))
+    return [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if n in held]
 
 
 # a Ctrl-C outside the windows (or a second one); SIGTERM or a first Ctrl-C in the windows

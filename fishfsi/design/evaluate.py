@@ -6,6 +6,7 @@ the objectives.
   (none, potential, slender_body): the linear periodic response about the mean-voltage
   equilibrium, ``fsi-sweep --method linear``'s ``linear_sweep`` at the case's drive.
 - ``wet_hz[i]``, ``dry_hz[i]`` and the modal case's keys: ``fsi-modal``'s ``modal_summary``.
+- a swimming case's keys (``swimming_speed_m_s``, ...): ``fsi-run``'s ``swimming_summary``.
 - everything else, and any case with OpenFOAM: the time march of ``fsi-run``
   (``run_dynamic``), into the evaluation's folder.
 
@@ -212,7 +213,11 @@ def run_design(case: Case, spec: EvaluationSpec, folder: Path) -> tuple[dict, di
         summary.update(modal_figures(case, spec.objectives))
         methods.append("modal")
     rest = wanted - MODAL_KEYS
-    if rest:
+    if rest and case.analysis.kind is AnalysisKind.SWIMMING:
+        summary.update(swimming_figures(case))
+        fidelity.update(modes=_sweep_modes(), samples_per_period=_samples())
+        methods.append("swimming")
+    elif rest:
         use_linear = spec.evaluation is Evaluation.LINEAR or (
             spec.evaluation is Evaluation.AUTO and rest <= LINEAR_KEYS and linear_applies(case)
         )
@@ -266,6 +271,16 @@ def linear_figures(case: Case) -> dict:
             "thrust_source": "slender_body",
         }
     return figures
+
+
+def swimming_figures(case: Case) -> dict:
+    """fsi-run --json's summary of a swimming case: the fast model at the case's drive."""
+    from ..cli.fast_model import without_cfd
+    from ..cli.linear import swimming_summary
+
+    summary = swimming_summary(without_cfd(case))
+    summary.pop("wall_s", None)
+    return summary
 
 
 def modal_figures(case: Case, objectives: tuple[Objective, ...]) -> dict:

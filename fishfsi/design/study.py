@@ -57,6 +57,21 @@ SCALAR_SUMMARY_KEYS = (
     "added_mass_kg",
     "plate_mass_kg",
     "mean_voltage_buckling_factor",
+    # a swimming case's (analysis.kind = "swimming": cli/swimming.py, cli/linear.py)
+    "swimming_speed_m_s",
+    "body_lengths_per_s",
+    "swimming_number",
+    "turning_rate_deg_s",
+    "thrust_at_speed_n",
+    "drag_at_speed_n",
+    "net_force_n",
+    "slip_deg",
+    "yaw_drive_moment_nm",
+    "tip_amplitude_at_speed_m",
+    "drive_power_w",
+    "drive_power_at_speed_w",
+    "work_per_distance_j_m",
+    "section_added_mass_coefficient",
 )
 # list-valued summary keys an objective may index: "wet_hz[0]" (the first wet mode)
 LIST_SUMMARY_KEYS = (
@@ -471,17 +486,24 @@ def load_study(directory: str | Path) -> Study:
 # what the linear periodic response (and the modal path beside it) gives
 LINEAR_QUANTITIES = ("tip_amplitude_m", "mean_thrust_n", "slender_body_mean_thrust_n")
 MODAL_QUANTITIES = ("dry_hz", "wet_hz", "added_mass_kg", "plate_mass_kg")
+# what a swimming case's summary gives (the fast model's row at the case's drive)
+SWIMMING_QUANTITIES = (
+    *LINEAR_QUANTITIES,
+    *SCALAR_SUMMARY_KEYS[SCALAR_SUMMARY_KEYS.index("swimming_speed_m_s") :],
+)
 
 
 def _check_linear(objectives: tuple[Objective, ...]) -> None:
     for o in objectives:
         match = _INDEXED.match(o.quantity)
         name = match.group(1) if match else o.quantity
-        if name not in (*LINEAR_QUANTITIES, *MODAL_QUANTITIES, "mean_voltage_buckling_factor"):
+        known = (*SWIMMING_QUANTITIES, *MODAL_QUANTITIES, "mean_voltage_buckling_factor")
+        if name not in known:
             _fail(
                 "method.evaluation",
                 f'= "linear" cannot give {o.quantity!r} (it gives '
-                f'{", ".join(LINEAR_QUANTITIES)} and the modal keys); use "auto" or "transient"',
+                f"{', '.join(LINEAR_QUANTITIES)}, a swimming case's keys and the modal keys); use "
+                '"auto" or "transient"',
             )
 
 
@@ -489,12 +511,45 @@ def check_base(study: Study) -> None:
     """The base case loads, and every parameter applies to it (a fish key on a rectangle is
     refused by the case loader): one line naming the key."""
     try:
-        load_case(study.base_case, study.overrides, allow_empty=False)
+        base = load_case(study.base_case, study.overrides, allow_empty=False)
     except CaseError as err:
         _fail("base:", str(err))
+    _check_swimming(study, base.analysis.kind.value, base.fluid.model.value)
     for p in study.parameters:
         mid = p.value(0.5)
         try:
             load_case(study.base_case, [*study.overrides, f"{p.key}={mid!r}"])
         except CaseError as err:
             _fail(f"[[parameters]] {p.key}:", f"does not apply to the base case ({err})")
+
+
+def _check_swimming(study: Study, kind: str, fluid: str) -> None:
+    """A swimming base case answers its summary's keys and the modal keys; the swimming keys
+    need such a base. One line naming the objective."""
+    swimming_only = set(SWIMMING_QUANTITIES) - set(LINEAR_QUANTITIES)
+    for i, o in enumerate(study.objectives, 1):
+        match = _INDEXED.match(o.quantity)
+        name = match.group(1) if match else o.quantity
+        where = f"[[objectives]] {i} quantity"
+        if kind != "swimming" and name in swimming_only:
+            _fail(where, f'{o.quantity!r} needs a swimming base case (analysis.kind = "swimming")')
+        modal = name in (*MODAL_QUANTITIES, "mean_voltage_buckling_factor")
+        if kind == "swimming" and not (modal or name in SWIMMING_QUANTITIES):
+            _fail(
+                where,
+                f"{o.quantity!r} is not given by a swimming base case (it gives its summary's "
+                "keys, e.g. swimming_speed_m_s, and the modal keys); set analysis.kind in the "
+                "base for a time march",
+            )
+    if kind == "swimming" and study.method.evaluation is Evaluation.TRANSIENT:
+        _fail(
+            "method.evaluation",
+            '= "transient" does not apply to a swimming base case (the fast model evaluates '
+            'it); use "auto"',
+        )
+    if kind == "swimming" and fluid == "openfoam":
+        _fail(
+            "base:",
+            'a design study evaluates swimming with the fast model: set fluid.model = "potential" '
+            "in the base (a flume with OpenFOAM is one fsi-run per speed)",
+        )
