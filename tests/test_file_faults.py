@@ -158,6 +158,14 @@ def test_a_damaged_results_file_is_refused_on_resume_in_one_line(done, capsys):
     assert checkpoint.read_bytes() == kept
 
 
+def test_fsi_post_names_a_cut_results_file_as_a_damaged_run(done, capsys):
+    _, out = done
+    _truncate(out / "results.h5")
+    assert post_cli.main([str(out)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    one_line_naming(lines, out / "results.h5", "not a readable results file", "cut short")
+
+
 def test_a_checkpoint_resumed_under_another_fluid_model_is_refused(done, capsys):
     """Half the windows with one fluid, half with another, under one label: refused."""
     case, out = done

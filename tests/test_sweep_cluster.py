@@ -131,6 +131,22 @@ def test_a_resume_of_another_case_is_refused_naming_what_changed(tmp_path, monke
     assert "fluid.damping_ratio: 0.05 -> 0.1" in err
 
 
+def test_a_resume_ignores_the_title_and_keys_of_a_section_the_sweep_does_not_read(tmp_path, capsys):
+    """case.title is free text; a beam sweep reads no [swimming] key, so a sweep made before
+    one was added there (sweep_case.json without it) resumes."""
+    out = tmp_path / "sweep"
+    args = [str(BEAM), *BEAM_SET, "--frequencies", "5", "--waveforms", "sine"]
+    args += ["--output", str(out), "--quiet"]
+    assert sweep_cli.main(args) == 0
+    stored = json.loads((out / "sweep_case.json").read_text())
+    del stored["case"]["swimming"]["section_added_mass"]
+    (out / "sweep_case.json").write_text(json.dumps(stored))
+    capsys.readouterr()
+    assert sweep_cli.main([*args, "--resume", "--set", "case.title='renamed'"]) == 0, (
+        capsys.readouterr().err
+    )
+
+
 def test_a_resume_into_a_folder_of_another_version_is_refused_naming_it(
     tmp_path, monkeypatch, capsys
 ):

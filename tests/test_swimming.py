@@ -319,7 +319,7 @@ def test_a_swimming_sweeps_table_shows_the_speed_not_the_thrust(capsys):
     assert "speed 1.42 m/s" in sweep.progress_line(free, 0.5, 1, 2)
     sweep.print_table([held])
     head, line = capsys.readouterr().out.splitlines()
-    assert "thrust [mN]" in head and "speed" not in head
+    assert "thrust [mN]" in head and "speed" not in head and head.split()[-1] == "status"
     assert line.split() == ["square", "18.00", "8.10", "12.30", "ok"]
 
 

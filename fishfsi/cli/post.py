@@ -528,6 +528,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _not_ours(found: Path, err: Exception) -> int:
     why = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+    if found.suffix == ".h5":  # fsi-run's own file, damaged (cut short while copied, ...)
+        print(
+            f"error: {found}: not a readable results file ({why}): damaged or cut short; "
+            "copy it again or rerun the case",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     print(
         f"error: {found}: not a table fsi-run or fsi-sweep wrote ({why}); "
         "point fsi-post at a run's output folder or a sweep's sweep.csv",

@@ -805,6 +805,19 @@ def sweep_identity(case: Case, method: str) -> dict:
     return json.loads(json.dumps(identity, default=str))
 
 
+def comparable(identity: dict, current: dict) -> dict:
+    """A sweep's identity less what changes none of its rows: the case's title (free text),
+    and the swimming section where the current sweep is not of a swimming case (a key added
+    there must not refuse a sweep that never reads it)."""
+    case = identity.get("case")
+    if not isinstance(case, dict):
+        return identity
+    case = {k: v for k, v in case.items() if k != "case"}
+    if current.get("case", {}).get("analysis", {}).get("kind") != "swimming":
+        case.pop("swimming", None)
+    return {**identity, "case": case}
+
+
 def identity_changes(old: dict, new: dict, limit: int = 3) -> str:
     """``section.key: old -> new`` for the first few differences."""
 
@@ -916,7 +929,8 @@ class SweepTable:
         if old == self.identity:
             return None
         if isinstance(old, dict):
-            return identity_changes(old, self.identity)
+            old, new = comparable(old, self.identity), comparable(self.identity, self.identity)
+            return None if old == new else identity_changes(old, new)
         return f"{case_file} is unreadable"
 
     def held(self, names: Sequence[str] | None = None) -> list[str]:
@@ -1040,7 +1054,7 @@ def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
 def print_table(rows: list[dict]) -> None:
     swimming = _swimming(rows)
     figures = f"{'speed [m/s]':>12} {'body lengths/s':>14}" if swimming else f"{'thrust [mN]':>12}"
-    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {figures}")
+    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {figures}  status")
     for r in rows:
         if swimming:
             speed = _figure(r.get("swimming_speed_m_s"), ".3f")

@@ -423,9 +423,20 @@ def _read(path: Path) -> dict:
 
 
 def load_study(directory: str | Path) -> Study:
-    """The validated study in ``directory/study.toml``; CaseError (one line) otherwise."""
-    directory = Path(directory)
-    path = directory / STUDY_FILE if directory.name != STUDY_FILE else directory
+    """The validated study in ``directory/study.toml``; CaseError (one line, naming the file)
+    otherwise."""
+    given = Path(directory)
+    path = given / STUDY_FILE if given.name != STUDY_FILE else given
+    try:
+        return _load_study(path)
+    except CaseError as err:
+        text = str(err)
+        if text.startswith(f"{STUDY_FILE}: "):
+            raise CaseError(f"{path}: {text.removeprefix(f'{STUDY_FILE}: ')}") from None
+        raise
+
+
+def _load_study(path: Path) -> Study:
     directory = path.parent.resolve()
     raw = _read(path)
     known = {"study", "base", "parameters", "objective", "objectives", "constraints", "method"}
