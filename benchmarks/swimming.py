@@ -244,7 +244,9 @@ def report(
         "",
         "Original robot, 18 Hz square, head on springs (`--set boundary.head=elastic --set "
         "boundary.support_stiffness_n_per_m=K`; the springs rest under the head weight, along "
-        "x, y and z), on the motion in still liquid (the flume's CFD below was made on it):",
+        "x, y and z), on the motion in still liquid and with the strip's added mass (`--set "
+        "swimming.speed_coupling=false --set swimming.section_added_mass=strip`: the flume's "
+        "CFD below was made and compared so):",
         "",
         "| head | tail amplitude [mm] | speed, Lighthill's thrust [m/s] | speed, pressure "
         "share [m/s] | pressure share's thrust there [N] |",

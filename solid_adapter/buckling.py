@@ -38,6 +38,8 @@ def buckling_factor(model: ShellModel, volts: NDArray, modes: int = 6) -> float:
     zero = model.zero_state()
     r0, K0, _ = model.internal(zero, np.zeros(2))
     load = -(model.internal(zero, volts, tangent=False)[0] - r0)
+    if not np.any(load):  # the mean voltage induces no strain (zero piezo constants)
+        return float("inf")
     free = static_free_dofs(model)
     K0ff = sp.csc_matrix(K0[free][:, free])
     x1 = np.zeros(model.ndof)

@@ -328,7 +328,7 @@ overrides = ["mesh.level=coarse"]
 
 [[parameters]]
 key = "actuation.frequency_hz"
-low = 14.0
+low = 1.0
 high = 18.0
 
 [objective]
@@ -342,7 +342,8 @@ points = 2
 
 
 def test_a_swimming_study_evaluates_fsi_runs_swimming_figures(tmp_path, capsys):
-    """Reference: fsi-run's summary of the swimming case (swimming_summary) at 14 and 18 Hz."""
+    """Reference: fsi-run's summary of the swimming case (swimming_summary) at 1 and 18 Hz.
+    At 1 Hz the square wave swims more than a body length per period: the record says so."""
     from fishfsi.cli.linear import swimming_summary
 
     study = write_study(tmp_path / "swim", SWIM_STUDY)
@@ -355,6 +356,12 @@ def test_a_swimming_study_evaluates_fsi_runs_swimming_figures(tmp_path, capsys):
         expected = swimming_summary(case)["swimming_speed_m_s"]
         assert float(row["swimming_speed_m_s"]) == pytest.approx(expected, rel=1e-9)
     assert summary["best"]["parameters"]["actuation.frequency_hz"] == 18.0  # the faster
+    assert rows[0]["reason"].startswith("swimming number above 1") and rows[1]["reason"] == ""
+    prescribed = '"mesh.level=coarse", "swimming.speed_m_s=0.5"'
+    flume = SWIM_STUDY.replace('"mesh.level=coarse"', prescribed)
+    bad = write_study(tmp_path / "flume", flume)
+    assert design_cli.main([str(bad), "--output", str(tmp_path / "flume_out")]) == 2
+    assert "fixed by the base's swimming.speed_m_s = 0.5" in capsys.readouterr().err
     transient = SWIM_STUDY.replace("points = 2", 'points = 2\nevaluation = "transient"')
     bad = write_study(tmp_path / "bad", transient)
     assert design_cli.main([str(bad), "--output", str(tmp_path / "bad_out")]) == 2

@@ -77,6 +77,13 @@ def test_mean_voltage_buckles_the_thin_core_but_not_the_original():
         assert buckling_factor(model, 0.5 * mean) == pytest.approx(2 * factor, rel=1e-3)
 
 
+def test_a_laminate_without_piezo_constants_does_not_buckle_under_its_mean_voltage():
+    """d33 = d31 = 0: the mean voltage induces no strain and no prestress, so nothing to
+    buckle (the eigen-solver had failed on the zero stress with "starting vector is zero")."""
+    model = _model("original", "actuation.d33_m_per_v=0", "actuation.d31_m_per_v=0")
+    assert buckling_factor(model, np.array([500.0, 500.0])) == float("inf")
+
+
 def test_a_buckling_mean_voltage_stops_the_run_in_one_line(tmp_path):
     run = subprocess.run(
         [

@@ -408,8 +408,12 @@ def test_a_modal_run_into_a_folder_holding_a_run_is_refused_unless_overwrite(don
     assert code == 0, lines
     assert "dry_hz" in json.loads((out / "summary.json").read_text())
     assert not (out / "results.h5").exists() and not (out / "checkpoint.h5").exists()
+    assert not (out / "vtk").exists()  # the earlier run's pictures went with it
     code, lines = run(capsys, case, *modal)  # its own summary is an earlier run too
     assert code == 2 and "summary.json" in lines[0]
+    code, lines = run(capsys, case, "--output", out)  # a dynamic run over the modal one
+    assert code == 2 and "holds an earlier run (summary.json)" in lines[0]
+    assert "dry_hz" in json.loads((out / "summary.json").read_text())
 
 
 def test_a_nan_result_never_exits_zero(done, capsys, monkeypatch):

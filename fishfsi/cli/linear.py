@@ -222,8 +222,9 @@ def not_finite_status(row: dict, keys: Sequence[str], step: str = "linear respon
     return f"failed: {', '.join(bad)} not finite ({step})"
 
 
-def swimming_summary(case: Case) -> dict:
-    """fsi-run's summary of a swimming case: the figures of the case's own drive."""
+def swimming_summary(case: Case, say_notes: bool = True) -> dict:
+    """fsi-run's summary of a swimming case: the figures of the case's own drive, and
+    ``notes`` (where the figures leave the model's reach; said on stderr with ``say_notes``)."""
     start = time.perf_counter()
     a = case.actuation
     rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
@@ -231,10 +232,14 @@ def swimming_summary(case: Case) -> dict:
     if not row["status"].startswith("ok"):
         raise SweepError(f"swimming: {row['status']}")
     keys = {TIGHT_TURN: "turning_rate_deg_s", FAST_FOR_ITS_BEAT: "swimming_number"}
-    for flag in row["status"].removeprefix("ok (").removesuffix(")").split("; "):
-        if flag in keys:
-            print(f"note: {flag} ({keys[flag]})", file=sys.stderr)
+    flags = row["status"].removeprefix("ok (").removesuffix(")").split("; ")
+    notes = [f"{flag} ({keys[flag]})" for flag in flags if flag in keys]
+    if say_notes:
+        for note in notes:
+            print(f"note: {note}", file=sys.stderr)
     summary = {k: row[k] for k in SWIMMING_KEYS}
     summary.update({k: v for k, v in row.items() if k not in summary and k != "status"})
+    if notes:
+        summary["notes"] = notes
     summary["wall_s"] = time.perf_counter() - start
     return summary

@@ -28,6 +28,8 @@ from fsi_orchestrator.results import (
 from .common import cannot_write
 
 SWEEP_FILES = ("sweep.csv", "sweep_rows")  # what fsi-sweep keeps in its --output
+# what an earlier fsi-run leaves besides a dynamic run's results: its summary, a flume's
+RUN_FILES = ("summary.json", "flume.json")
 
 
 def refuse_unwritable(output: Path, names: tuple[str, ...] | None = None) -> None:
@@ -61,7 +63,7 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
             f"--output {output}: holds a sweep of fsi-sweep ({', '.join(sweep)}); write the run "
             "elsewhere with --output"
         )
-    held = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (output / n).exists()]
+    held = [n for n in (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES) if (output / n).exists()]
     if held and not resume and not overwrite:
         raise CaseError(
             f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "

@@ -48,7 +48,13 @@ from .compose import (
 from .fast_model import shell_with_fast_fluid
 from .linear import swimming_summary
 from .modal import modal_summary
-from .outputs import check_finite, label_results, prepare_output, refuse_unwritable
+from .outputs import (
+    SWEEP_FILES,
+    check_finite,
+    label_results,
+    prepare_output,
+    refuse_unwritable,
+)
 from .progress import RunProgress, StopRequest
 
 
@@ -710,7 +716,8 @@ def _body(args: argparse.Namespace) -> int:
     summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     emit(summary, args.json)
     for name in replaced:  # a dynamic run's files, which this summary does not describe
-        (output / name).unlink(missing_ok=True)
+        path = output / name
+        shutil.rmtree(path, ignore_errors=True) if path.is_dir() else path.unlink(missing_ok=True)
     if keep:
         path = output / RUN_SUMMARY_FILE
         try:
@@ -741,9 +748,15 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
         output.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise CaseError(cannot_write(output, err)) from None
+    sweep = [n for n in SWEEP_FILES if (output / n).exists()]
+    if sweep:  # the sweep's table would be drawn, not this run
+        raise CaseError(
+            f"--output {output}: holds a sweep of fsi-sweep ({', '.join(sweep)}); write the run "
+            "elsewhere with --output"
+        )
     held = [
         n
-        for n in (RUN_SUMMARY_FILE, RESULTS_FILE, CHECKPOINT_FILE, FLUME_FILE)
+        for n in (RUN_SUMMARY_FILE, RESULTS_FILE, CHECKPOINT_FILE, FLUME_FILE, "vtk")
         if (output / n).exists()
     ]
     if held and not args.overwrite:
@@ -752,7 +765,7 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
             "with --output, or replace it with --overwrite"
         )
     refuse_unwritable(output, (RUN_SUMMARY_FILE,))
-    return [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if n in held]
+    return [n for n in (RESULTS_FILE, CHECKPOINT_FILE, "vtk") if n in held]
 
 
 # a Ctrl-C outside the windows (or a second one); SIGTERM or a first Ctrl-C in the windows

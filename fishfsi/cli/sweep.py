@@ -871,7 +871,10 @@ class SweepTable:
         refusal comes before anything there is written."""
         from fsi_orchestrator.results import CHECKPOINT_FILE, RESULTS_FILE, probe_write
 
-        run = [n for n in (RESULTS_FILE, CHECKPOINT_FILE) if (self.output / n).is_file()]
+        from .outputs import RUN_FILES
+
+        held = (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES)
+        run = [n for n in held if (self.output / n).is_file()]
         if run:  # fsi-post would draw the sweep and no longer find the run
             raise CaseError(
                 f"--output {self.output}: holds a run of fsi-run ({', '.join(run)}); sweep "

@@ -133,9 +133,10 @@ def evaluate(spec: EvaluationSpec, design: Design) -> dict:
             record["objectives"] = values
             bad = [q for q, v in values.items() if not math.isfinite(v)]
             if bad:
-                record.update(status=FAILED, reason=f"{', '.join(bad)} not finite")
+                record.update(status=FAILED, reason=_why_not_finite(bad, summary))
             else:
                 record["score"] = sum(o.score(values[o.quantity]) for o in spec.objectives)
+                record["reason"] = "; ".join(summary.get("notes", []))  # the model's reach
         except CaseError as err:  # a design the model refuses (a buckling mean voltage)
             record.update(status=INFEASIBLE, reason=str(err).removeprefix("case.toml: "))
         except (SolverError, RuntimeError, ValueError, ArithmeticError) as err:
@@ -144,6 +145,15 @@ def evaluate(spec: EvaluationSpec, design: Design) -> dict:
     record["wall_s"] = time.perf_counter() - start
     atomic_write(folder / SUMMARY_FILE, json_text(record, indent=1))
     return record
+
+
+def _why_not_finite(bad: list[str], summary: dict) -> str:
+    missing = [q for q in bad if summary.get(_base_name(q)) is None]
+    if missing and summary.get("swimming_speed_m_s") == 0:
+        return f"{', '.join(missing)} not given: the fish does not swim (swimming_speed_m_s = 0)"
+    if missing:
+        return f"{', '.join(missing)} not given by this design's evaluation"
+    return f"{', '.join(bad)} not finite"
 
 
 def check_design(case: Case, constraints: tuple[Constraint, ...], values: dict) -> None:
@@ -278,7 +288,7 @@ def swimming_figures(case: Case) -> dict:
     from ..cli.fast_model import without_cfd
     from ..cli.linear import swimming_summary
 
-    summary = swimming_summary(without_cfd(case))
+    summary = swimming_summary(without_cfd(case), say_notes=False)  # in the record's reason
     summary.pop("wall_s", None)
     return summary
 

@@ -27,6 +27,9 @@ IDENTITY_FILE = "study.json"
 OnRecord = Callable[[dict], None]
 
 
+EVALUATION_REVISION = 2
+
+
 def study_identity(study: Study, spec: EvaluationSpec) -> dict:
     from fsi_orchestrator import __version__
     from fsi_orchestrator.case.schema import Fluid
@@ -37,6 +40,9 @@ def study_identity(study: Study, spec: EvaluationSpec) -> dict:
         "base": spec.base_raw,
         # the fast thrust's default KC0: records of Lighthill's thrust alone do not resume
         "fast_thrust_shedding_kc": Fluid().thrust_shedding_kc,
+        # raised where the same inputs are evaluated otherwise (2: a swimming base case's
+        # keys by the fast model, where designs had been recorded infeasible)
+        "evaluation_revision": EVALUATION_REVISION,
     }
     return json.loads(json.dumps(identity, default=str))
 

@@ -497,6 +497,8 @@ def _load_study(path: Path) -> Study:
 # what the linear periodic response (and the modal path beside it) gives
 LINEAR_QUANTITIES = ("tip_amplitude_m", "mean_thrust_n", "slender_body_mean_thrust_n")
 MODAL_QUANTITIES = ("dry_hz", "wet_hz", "added_mass_kg", "plate_mass_kg")
+# what a prescribed swimming.speed_m_s sets
+SPEED_QUANTITIES = ("swimming_speed_m_s", "body_lengths_per_s", "swimming_number")
 # what a swimming case's summary gives (the fast model's row at the case's drive)
 SWIMMING_QUANTITIES = (
     *LINEAR_QUANTITIES,
@@ -526,6 +528,16 @@ def check_base(study: Study) -> None:
     except CaseError as err:
         _fail("base:", str(err))
     _check_swimming(study, base.analysis.kind.value, base.fluid.model.value)
+    varied = {p.key for p in study.parameters}
+    if base.swimming.speed_m_s is not None and "swimming.speed_m_s" not in varied:
+        fixed = [o.quantity for o in study.objectives if o.quantity in SPEED_QUANTITIES]
+        if fixed:
+            _fail(
+                "[[objectives]] quantity",
+                f"{fixed[0]!r} is fixed by the base's swimming.speed_m_s = "
+                f"{base.swimming.speed_m_s:g} (a flume's speed): unset it for the "
+                "self-propelled speed",
+            )
     for p in study.parameters:
         mid = p.value(0.5)
         try:
