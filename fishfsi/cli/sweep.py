@@ -873,8 +873,8 @@ class SweepTable:
 
         from .outputs import RUN_FILES
 
-        held = (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES)
-        run = [n for n in held if (self.output / n).is_file()]
+        run_files = (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES)
+        run = [n for n in run_files if (self.output / n).is_file()]
         if run:  # fsi-post would draw the sweep and no longer find the run
             raise CaseError(
                 f"--output {self.output}: holds a run of fsi-run ({', '.join(run)}); sweep "
