@@ -526,9 +526,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     return EXIT_OK
 
 
+def _is_hdf5(path: Path) -> bool:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(8) == b"\x89HDF\r\n\x1a\n"
+    except OSError:
+        return False
+
+
 def _not_ours(found: Path, err: Exception) -> int:
     why = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
-    if found.suffix == ".h5":  # fsi-run's own file, damaged (cut short while copied, ...)
+    if _is_hdf5(found):  # fsi-run's own file, damaged (cut short while copied, ...)
         print(
             f"error: {found}: not a readable results file ({why}): damaged or cut short; "
             "copy it again or rerun the case",
