@@ -53,6 +53,21 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
     checkpoint = output / CHECKPOINT_FILE
     if resume and not checkpoint.exists():  # before the folder is made: nothing left behind
         raise ResumeError(f"{checkpoint}: no checkpoint to resume from; {AFRESH}")
+    held = open_run_folder(output, (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES))
+    if held and not resume and not overwrite:
+        raise CaseError(
+            f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "
+            "--resume, write elsewhere with --output, or replace it with --overwrite"
+        )
+    refuse_unwritable(output)
+    if resume:
+        check_results_readable(output / RESULTS_FILE, checkpoint)
+    return bool(held) and not resume
+
+
+def open_run_folder(output: Path, names: tuple[str, ...]) -> list[str]:
+    """Make a run's --output (one line where it cannot be made), refuse a sweep's folder, and
+    return which of an earlier run's ``names`` it holds."""
     try:
         output.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -63,16 +78,7 @@ def prepare_output(output: Path, resume: bool, overwrite: bool) -> bool:
             f"--output {output}: holds a sweep of fsi-sweep ({', '.join(sweep)}); write the run "
             "elsewhere with --output"
         )
-    held = [n for n in (RESULTS_FILE, CHECKPOINT_FILE, *RUN_FILES) if (output / n).exists()]
-    if held and not resume and not overwrite:
-        raise CaseError(
-            f"--output {output}: holds an earlier run ({', '.join(held)}); continue it with "
-            "--resume, write elsewhere with --output, or replace it with --overwrite"
-        )
-    refuse_unwritable(output)
-    if resume:
-        check_results_readable(output / RESULTS_FILE, checkpoint)
-    return bool(held) and not resume
+    return [n for n in names if (output / n).exists()]
 
 
 def check_results_readable(results: Path, checkpoint: Path) -> None:

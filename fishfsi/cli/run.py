@@ -27,7 +27,6 @@ from .common import (
     EXIT_OK,
     atomic_write,
     base_parser,
-    cannot_write,
     emit,
     json_text,
     load,
@@ -49,9 +48,9 @@ from .fast_model import shell_with_fast_fluid
 from .linear import swimming_summary
 from .modal import modal_summary
 from .outputs import (
-    SWEEP_FILES,
     check_finite,
     label_results,
+    open_run_folder,
     prepare_output,
     refuse_unwritable,
 )
@@ -744,21 +743,9 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
             f"--resume: a {kind.value} run keeps no checkpoint to continue; run it again "
             "(with --overwrite to replace its --output)"
         )
-    try:
-        output.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CaseError(cannot_write(output, err)) from None
-    sweep = [n for n in SWEEP_FILES if (output / n).exists()]
-    if sweep:  # the sweep's table would be drawn, not this run
-        raise CaseError(
-            f"--output {output}: holds a sweep of fsi-sweep ({', '.join(sweep)}); write the run "
-            "elsewhere with --output"
-        )
-    held = [
-        n
-        for n in (RUN_SUMMARY_FILE, RESULTS_FILE, CHECKPOINT_FILE, FLUME_FILE, "vtk")
-        if (output / n).exists()
-    ]
+    held = open_run_folder(
+        output, (RUN_SUMMARY_FILE, RESULTS_FILE, CHECKPOINT_FILE, FLUME_FILE, "vtk")
+    )
     if held and not args.overwrite:
         raise CaseError(
             f"--output {output}: holds an earlier run ({', '.join(held)}); write elsewhere "
