@@ -357,6 +357,11 @@ def turning_rate(x, half_height, h, dt_s, **load) -> Turning:
     def moment(rate: float) -> float:
         return loads(slip_of(rate), rate).yaw_moment_nm
 
+    if not load["speed_m_s"] > 0:  # no forward speed (a flume at 0 m/s): no path to turn
+        # along, and no sideslip to speak of
+        return Turning(
+            yaw_rate_rad_s=0.0, slip_rad=0.0, drive_moment_nm=loads(0.0, 0.0).yaw_moment_nm
+        )
     if mirrored_over_half_a_period(h):  # N = 0 exactly: what is left is round-off, and at a
         # low speed the yaw balance near 0 is unstable, so round-off would pick a far root
         return Turning(yaw_rate_rad_s=0.0, slip_rad=0.0, drive_moment_nm=0.0)

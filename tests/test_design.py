@@ -183,7 +183,7 @@ def test_resume_evaluates_again_a_design_whose_record_lost_its_figures(finished,
         (("low = 2.0", "low = -1.0"), "outside the key's valid range"),
         (("high = 6.0", "high = 2000.0"), "outside the key's valid range"),
         (('quantity = "tip_amplitude_m"', 'quantity = "tip_amplitude"'), "'tip_amplitude'"),
-        (('sense = "max"', 'sense = "up"'), "objective sense"),
+        (('sense = "max"', 'sense = "up"'), "[objective] sense"),
         (('kind = "one-at-a-time"', 'kind = "grid"'), "method.kind"),
         (("<= 5", "<= __import__"), "[[constraints]]"),
         (
@@ -192,7 +192,7 @@ def test_resume_evaluates_again_a_design_whose_record_lost_its_figures(finished,
         ),
         (
             ('quantity = "tip_amplitude_m"', 'quantity = "swimming_speed_m_s"'),
-            "needs a swimming base case",
+            "[objective] quantity 'swimming_speed_m_s' needs a swimming base case",
         ),
     ],
 )

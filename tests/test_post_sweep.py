@@ -153,7 +153,15 @@ def test_a_mesh_reference_of_another_case_or_the_same_level_is_refused_in_one_li
     _write_sweep(tmp_path / "coarse", _rows([(3, 0.008, 0.014)]), OPENFOAM_COARSE)
     _write_sweep(tmp_path / "serial", _rows([(3, 0.01, 0.02)]), other)
     _write_sweep(tmp_path / "same", _rows([(3, 0.01, 0.02)]), OPENFOAM_COARSE)
-    for folder, says in (("serial", "geometry.preset"), ("same", "same fluid.mesh_level")):
+    # another case on the same level: what differs is the case, not the level
+    other_coarse = json.loads(json.dumps(other))
+    other_coarse["case"]["fluid"]["mesh_level"] = "coarse"
+    _write_sweep(tmp_path / "serial_coarse", _rows([(3, 0.01, 0.02)]), other_coarse)
+    for folder, says in (
+        ("serial", "geometry.preset"),
+        ("same", "same fluid.mesh_level"),
+        ("serial_coarse", "another sweep, not only another fluid.mesh_level (geometry.preset"),
+    ):
         code = post.main([str(tmp_path / "coarse"), "--mesh-reference", str(tmp_path / folder)])
         err = capsys.readouterr().err.strip()
         assert code == 2 and says in err and len(err.splitlines()) == 1

@@ -87,13 +87,46 @@ def test_the_divergence_speed_is_where_the_elastic_stiffness_is_used_up():
 
 def test_a_prescribed_speed_past_the_divergence_is_refused_in_one_line(capsys):
     """The original robot's motion diverges near 4.1 m/s (2.5 m/s with the strip's own added
-    mass): a flume speed past it gets one line naming the key and a non-zero exit, not a
+    mass): a flume speed past it gets one line naming the key and the bad-input exit, not a
     figure of a meaningless motion."""
     code = run.main([str(CASE), "--json", "--set", "swimming.speed_m_s=5"])
     out, err = capsys.readouterr()
-    assert code != 0 and out == ""
+    assert code == 2 and out == ""  # bad input, refused before the work
     assert len(err.strip().splitlines()) == 1
     assert "swimming.speed_m_s = 5 is past the plate's divergence speed (4.07 m/s)" in err
+
+
+def test_at_no_forward_speed_nothing_turns_nor_slips(capsys):
+    """A flume at 0 m/s: no path to turn along, so the right-turn drive reports no turn, no
+    sideslip and no note of a tight turn (the radius V / Omega had read 0 / 0)."""
+    code, out, err = fsi_run(capsys, "swimming.speed_m_s=0", RIGHT_TURN)
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["turning_rate_deg_s"] == 0.0 and summary["slip_deg"] == 0.0
+    assert "notes" not in summary and "note:" not in err
+
+
+def test_a_swimming_case_is_not_swept_by_a_time_march(tmp_path, capsys):
+    """The swimming figures come from the linear response at speed: a transient sweep of a
+    swimming case would drop them without a word. One line naming analysis.kind, exit 2."""
+    argv = [str(CASE), "--method", "transient", "--frequencies", "18", "--quiet"]
+    code = sweep.main([*argv, "--output", str(tmp_path / "sweep")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert err.startswith('error: analysis.kind = "swimming"') and "--method transient" in err
+    assert not (tmp_path / "sweep").exists()
+
+
+def test_an_interrupted_swimming_run_says_nothing_was_kept(tmp_path, capsys, monkeypatch):
+    """A swimming (or modal, static) run keeps no checkpoint: Ctrl-C says to run it again,
+    not to --resume (which it refuses)."""
+
+    def stopped(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "execute", stopped)
+    assert run.main([str(CASE), "--output", str(tmp_path / "out")]) == 130
+    assert capsys.readouterr().err == "interrupted: nothing was written; run it again\n"
 
 
 def test_a_turn_tighter_than_the_body_at_a_low_prescribed_speed_says_so(capsys):
@@ -321,6 +354,14 @@ def test_a_swimming_sweeps_table_shows_the_speed_not_the_thrust(capsys):
     head, line = capsys.readouterr().out.splitlines()
     assert "thrust [mN]" in head and "speed" not in head and head.split()[-1] == "status"
     assert line.split() == ["square", "18.00", "8.10", "12.30", "ok"]
+    # the tail at the swimming speed where the rows carry it; three figures, no exponent
+    at_speed = {**free, "tip_amplitude_at_speed_m": 0.0035}
+    sweep.print_table([at_speed])
+    head, line = capsys.readouterr().out.splitlines()
+    assert "tip at speed [mm]" in head and line.split()[2] == "3.50"
+    assert "tip at speed 3.50 mm, speed 1.42 m/s" in sweep.progress_line(at_speed, 0.5, 1, 2)
+    strong = {**held, "slender_body_mean_thrust_n": 1.0}
+    assert "tip amplitude 8.10 mm, thrust 1000 mN" in sweep.progress_line(strong, 0.5, 1, 2)
 
 
 def test_sweep_rows_carry_the_swimming_columns(square_curves):

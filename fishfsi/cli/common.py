@@ -214,8 +214,10 @@ def emit(summary: dict[str, Any], as_json: bool) -> None:
     if as_json:
         print(json_text(summary))
         return
-    for key, value in plain(summary).items():
-        print(f"{key:>32}: {plain_text(value)}")
+    table = plain(summary)
+    width = max((len(key) for key in table), default=0)
+    for key, value in table.items():
+        print(f"{key:>{width}}: {plain_text(value)}")
 
 
 @contextlib.contextmanager

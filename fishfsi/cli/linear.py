@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fsi_orchestrator.case import Case
+from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.schema import AnalysisKind, FluidModel, Waveform
 
 from .fast_model import SweepError, linear_model, midline_nodes, without_cfd
-from .swimming import SWIMMING_KEYS, swimming_model
+from .swimming import SWIMMING_KEYS, SwimmingModel, swimming_model
 
 if TYPE_CHECKING:
     pass
@@ -70,6 +70,7 @@ def linear_sweep(
             max_speed_m_s=linear.divergence_speed_m_s,
             added_mass_coefficient=linear.section_added_mass_coefficient,
         )
+        refuse_a_speed_past_divergence(swim)
     pushes = case.fluid.model is not FluidModel.NONE  # in vacuum nothing is pushed
     length = float(np.ptp(model.mesh.nodes[:, 0]))
     rows = []
@@ -148,6 +149,14 @@ def linear_sweep(
             file=sys.stderr,
         )
     return rows
+
+
+def refuse_a_speed_past_divergence(swim: SwimmingModel) -> None:
+    """A prescribed swimming.speed_m_s at or past the motion's divergence speed is bad input,
+    the same at every frequency: refused before the work, in one line naming the key."""
+    speed = swim.prescribed_speed_m_s
+    if speed is not None and speed >= swim.max_speed_m_s:
+        raise CaseError(swim.past_divergence())
 
 
 def _at_the_speed(linear, at_speed, row: dict, tip: int, times, waveform: Waveform) -> dict:
@@ -230,7 +239,7 @@ def swimming_summary(case: Case, say_notes: bool = True) -> dict:
     rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
     row = rows[0]
     if not row["status"].startswith("ok"):
-        raise SweepError(f"swimming: {row['status']}")
+        raise SweepError(f"swimming: {row['status'].removeprefix('failed: ')}")
     keys = {TIGHT_TURN: "turning_rate_deg_s", FAST_FOR_ITS_BEAT: "swimming_number"}
     flags = row["status"].removeprefix("ok (").removesuffix(")").split("; ")
     notes = [f"{flag} ({keys[flag]})" for flag in flags if flag in keys]

@@ -205,12 +205,6 @@ def check_mesh_reference(identity: dict | None, reference: dict | None, path: Pa
             f"{path}: a mesh reference needs both sweeps' sweep_case.json (written by "
             "fsi-sweep) to tell that they differ only in fluid.mesh_level"
         )
-    if mesh_level(identity) == mesh_level(reference):
-        raise PostError(
-            f"{path}: the mesh reference is on the same fluid.mesh_level "
-            f"({mesh_level(identity)!r}); sweep the case again with another "
-            "--set fluid.mesh_level=..."
-        )
     a, b = copy.deepcopy(identity), copy.deepcopy(reference)
     for side in (a, b):
         side.get("case", {}).get("fluid", {}).pop("mesh_level", None)
@@ -221,6 +215,12 @@ def check_mesh_reference(identity: dict | None, reference: dict | None, path: Pa
         raise PostError(
             f"{path}: the mesh reference is another sweep, not only another fluid.mesh_level "
             f"({identity_changes(a, b)})"
+        )
+    if mesh_level(identity) == mesh_level(reference):
+        raise PostError(
+            f"{path}: the mesh reference is on the same fluid.mesh_level "
+            f"({mesh_level(identity)!r}); sweep the case again with another "
+            "--set fluid.mesh_level=..."
         )
 
 
@@ -261,6 +261,7 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
         ref_rows, ref_identity = read_sweep(mesh_reference)
         check_mesh_reference(identity, ref_identity, mesh_reference)
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
+    swimming = any("swimming_speed_m_s" in r for r in rows)
     if is_original_fish(identity):
         overlay_seed(ax_amp, ax_thrust, head_support(identity))
     table = []
@@ -274,11 +275,19 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
         amp_err = [1e3 * _float(r, "tip_amplitude_periodic_uncertainty_m") for r in sel]
         thrust = [1e3 * _thrust(r) for r in sel]
         thrust_err = [1e3 * _float(r, "mean_thrust_periodic_uncertainty_n") for r in sel]
+        if swimming:  # the free fish in still liquid; its figures at speed dashed beside
+            label += ", still liquid"
         finite = [e if np.isfinite(e) else 0.0 for e in amp_err]
         drawn = ax_amp.errorbar(f, amp, yerr=finite, fmt="o-", capsize=2, label=label)
         finite = [e if np.isfinite(e) else 0.0 for e in thrust_err]
         ax_thrust.errorbar(f, thrust, yerr=finite, fmt="o-", capsize=2, label=label)
         colour = drawn[0].get_color()
+        if swimming:
+            at_speed = f"{waveform}, at the swimming speed"
+            for ax, key in ((ax_amp, "tip_amplitude_at_speed_m"), (ax_thrust, "thrust_at_speed_n")):
+                if any(key in r for r in sel):
+                    values = [1e3 * _float(r, key) for r in sel]
+                    ax.plot(f, values, "s--", mfc="none", color=colour, label=at_speed)
         if mesh_reference is None:
             continue
         ref = [r for r in ref_rows if r["waveform"] == waveform]

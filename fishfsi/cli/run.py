@@ -712,7 +712,14 @@ def _body(args: argparse.Namespace) -> int:
     replaced: list[str] = []
     if keep and case.analysis.kind is not AnalysisKind.DYNAMIC:
         replaced = _refuse_an_earlier_run(output, case.analysis.kind, args)
-    summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
+    try:
+        summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
+    except KeyboardInterrupt as err:
+        from fsi_orchestrator.participant import ParticipantStopped
+
+        if str(err) or isinstance(err, ParticipantStopped):  # the loop's own word
+            raise
+        raise KeyboardInterrupt(_what_an_interrupt_keeps(case, output)) from None
     emit(summary, args.json)
     for name in replaced:  # a dynamic run's files, which this summary does not describe
         path = output / name
@@ -753,6 +760,16 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
         )
     refuse_unwritable(output, (RUN_SUMMARY_FILE,))
     return [n for n in (RESULTS_FILE, CHECKPOINT_FILE, "vtk") if n in held]
+
+
+def _what_an_interrupt_keeps(case: Case, output: Path) -> str:
+    """What a Ctrl-C outside the windows leaves: a modal, static or swimming run writes
+    nothing until its answer; a dynamic run keeps its last checkpoint, if it has one."""
+    if case.analysis.kind is not AnalysisKind.DYNAMIC:
+        return "nothing was written; run it again"
+    if not (output / CHECKPOINT_FILE).is_file():
+        return "stopped before the first checkpoint: nothing to resume; run it again"
+    return "the results up to the last checkpoint are kept; continue with --resume"
 
 
 # a Ctrl-C outside the windows (or a second one); SIGTERM or a first Ctrl-C in the windows

@@ -51,7 +51,13 @@ import numpy as np
 
 from fsi_orchestrator.case import Case, CaseError
 from fsi_orchestrator.case.params import coerce
-from fsi_orchestrator.case.schema import FluidModel, GeometryKind, Waveform, key_spec
+from fsi_orchestrator.case.schema import (
+    AnalysisKind,
+    FluidModel,
+    GeometryKind,
+    Waveform,
+    key_spec,
+)
 
 from .common import (
     EXIT_BAD_INPUT,
@@ -1029,8 +1035,25 @@ def _thrust(row: dict) -> float | None:
 
 
 def _figure(value: float | None, spec: str, scale: float = 1.0) -> str:
-    """A figure (times ``scale``); a failed point's (null in the tables) as '-'."""
-    return "-" if value is None or not np.isfinite(value) else format(scale * value, spec)
+    """A figure (times ``scale``); a failed point's (null in the tables) as '-'. ``spec``
+    "3s": three significant figures without an exponent (1000, 8.70, 0.0120)."""
+    if value is None or not np.isfinite(value):
+        return "-"
+    value = scale * value
+    if spec == "3s":
+        digits = 2 - int(np.floor(np.log10(abs(value)))) if value else 2
+        return f"{value:.{max(digits, 0)}f}"
+    return format(value, spec)
+
+
+def _tip_key(rows: list[dict]) -> tuple[str, str]:
+    """The tail amplitude a sweep's table shows, and its header: a swimming sweep's at the
+    swimming speed where its rows carry it (swimming.speed_coupling), else in still liquid."""
+    if _swimming(rows):
+        if any("tip_amplitude_at_speed_m" in r for r in rows):
+            return "tip_amplitude_at_speed_m", "tip at speed [mm]"
+        return "tip_amplitude_m", "tip, still liquid [mm]"
+    return "tip_amplitude_m", "tip amplitude [mm]"
 
 
 def _swimming(rows: list[dict]) -> bool:
@@ -1044,20 +1067,22 @@ def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
     thrust = _thrust(row)
     status = row.get("status", "ok")
     tail = "" if status == "ok" else f"; {status}"
-    figure = "" if thrust is None else f"thrust {_milli(thrust, '.3g')} mN, "
+    figure = "" if thrust is None else f"thrust {_milli(thrust, '3s')} mN, "
     if _swimming([row]):
-        figure = f"speed {_figure(row.get('swimming_speed_m_s'), '.3g')} m/s, "
+        figure = f"speed {_figure(row.get('swimming_speed_m_s'), '3s')} m/s, "
+    key, header = _tip_key([row])
+    name = header.removesuffix(" [mm]")
     return (
-        f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: tip "
-        f"amplitude {_milli(row.get('tip_amplitude_m'), '.3g')} mm, {figure}"
-        f"{wall_s:.1f} s{tail}"
+        f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: "
+        f"{name} {_milli(row.get(key), '3s')} mm, {figure}{wall_s:.1f} s{tail}"
     )
 
 
 def print_table(rows: list[dict]) -> None:
     swimming = _swimming(rows)
     figures = f"{'speed [m/s]':>12} {'body lengths/s':>14}" if swimming else f"{'thrust [mN]':>12}"
-    print(f"{'waveform':>8} {'f [Hz]':>7} {'tip amplitude [mm]':>19} {figures}  status")
+    tip, header = _tip_key(rows)
+    print(f"{'waveform':>8} {'f [Hz]':>7} {header:>22} {figures}  status")
     for r in rows:
         if swimming:
             speed = _figure(r.get("swimming_speed_m_s"), ".3f")
@@ -1066,7 +1091,7 @@ def print_table(rows: list[dict]) -> None:
             figures = f"{_milli(_thrust(r), '.2f'):>12}"
         print(
             f"{r['waveform']:>8} {r['frequency_hz']:7.2f} "
-            f"{_milli(r.get('tip_amplitude_m'), '.2f'):>19} {figures}  {r.get('status', '')}"
+            f"{_milli(r.get(tip), '.2f'):>22} {figures}  {r.get('status', '')}"
         )
 
 
@@ -1093,6 +1118,12 @@ def _sweep(args: argparse.Namespace) -> int:
     start_from = Path(args.start_from) if args.start_from else None
     if start_from is not None:
         check_start_from(case, start_from, args.method)
+    if case.analysis.kind is AnalysisKind.SWIMMING and args.method == "transient":
+        raise CaseError(
+            'analysis.kind = "swimming": the swimming speed and turning come from the linear '
+            "periodic response at speed; drop --method transient (the same fish's time march in "
+            'still liquid: --set analysis.kind="dynamic")'
+        )
     if case.time.start_from and args.method == "transient":
         raise CaseError(
             "time.start_from names one run, at one frequency; a sweep starts each point from "

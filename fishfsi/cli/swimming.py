@@ -54,6 +54,15 @@ class SwimmingModel:
     # the motion's divergence speed where it is solved at each speed (swimming.speed_coupling)
     max_speed_m_s: float = float("inf")
 
+    def past_divergence(self) -> str:
+        """Why a prescribed speed at or past the motion's divergence speed has no answer."""
+        return (
+            f"swimming.speed_m_s = {self.prescribed_speed_m_s:g} is past the plate's divergence "
+            f"speed ({self.max_speed_m_s:.3g} m/s), where the load at speed outgrows the "
+            "stiffness of its modes and the linear motion means nothing: give a lower speed, "
+            "or swimming.speed_coupling = false for the still liquid's motion"
+        )
+
     def row(self, times: NDArray, history: Callable[[float], NDArray], frequency_hz: float) -> dict:
         """The swimming columns of one drive from the midline history at a forward speed,
         ``history(V)`` (len(times), n_x), sampled at ``times`` over one period (the end point
@@ -89,12 +98,7 @@ class SwimmingModel:
                 limit = min(self.max_speed_m_s, MAX_SPEED_M_S)
                 speed = self_propelled_speed(thrust, self.drag.total, max_speed_m_s=limit)
             elif speed >= self.max_speed_m_s:
-                raise SwimmingError(
-                    f"swimming.speed_m_s = {speed:g} is past the plate's divergence speed "
-                    f"({self.max_speed_m_s:.3g} m/s), where the load at speed outgrows the "
-                    "stiffness of its modes and the linear motion means nothing: give a lower "
-                    "speed, or swimming.speed_coupling = false for the still liquid's motion"
-                )
+                raise SwimmingError(self.past_divergence())
             return speed, thrust(speed)
 
         slip, speed, thrust = 0.0, 0.0, 0.0

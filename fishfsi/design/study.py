@@ -127,6 +127,7 @@ class Objective:
     quantity: str  # a summary key, or "wet_hz[0]"
     sense: Sense = Sense.MAX
     weight: float = 1.0
+    where: str = dataclasses.field(default="[objective]", compare=False)  # for messages
 
     def score(self, value: float) -> float:
         """This objective's share of the score, larger is better."""
@@ -198,6 +199,8 @@ class Study:
         fields.pop("directory")
         fields["base_case"] = str(self.base_case)
         fields.pop("title")
+        for objective in fields["objectives"]:  # how the file spelt it is no part of it
+            objective.pop("where")
         method = fields["method"]
         for key in ("points", "budget", "initial"):  # more points may reuse the finished ones
             method.pop(key)
@@ -322,7 +325,7 @@ def _objective(raw: Any, where: str) -> Objective:
     weight = _number(f"{where} weight", raw.get("weight", 1.0))
     if not weight > 0:
         _fail(f"{where} weight", f"must be > 0, got {weight:g}")
-    return Objective(quantity=quantity, sense=Sense(sense), weight=weight)
+    return Objective(quantity=quantity, sense=Sense(sense), weight=weight, where=where)
 
 
 _TOKEN = re.compile(r"\s*(<=|>=|<|>|\*|\+|-|[0-9.]+(?:[eE][-+]?\d+)?|[a-z_]+\.[a-z0-9_]+)")
@@ -459,7 +462,7 @@ def _load_study(path: Path) -> Study:
     if ("objective" in raw) == ("objectives" in raw):
         _fail("[objective]", "is required (or a list [[objectives]] with weights), not both")
     if "objective" in raw:
-        objectives: tuple[Objective, ...] = (_objective(raw["objective"], "objective"),)
+        objectives: tuple[Objective, ...] = (_objective(raw["objective"], "[objective]"),)
     else:
         listed = raw["objectives"]
         if not isinstance(listed, list) or not listed:
@@ -530,11 +533,11 @@ def check_base(study: Study) -> None:
     _check_swimming(study, base.analysis.kind.value, base.fluid.model.value)
     varied = {p.key for p in study.parameters}
     if base.swimming.speed_m_s is not None and "swimming.speed_m_s" not in varied:
-        fixed = [o.quantity for o in study.objectives if o.quantity in SPEED_QUANTITIES]
+        fixed = [o for o in study.objectives if o.quantity in SPEED_QUANTITIES]
         if fixed:
             _fail(
-                "[[objectives]] quantity",
-                f"{fixed[0]!r} is fixed by the base's swimming.speed_m_s = "
+                f"{fixed[0].where} quantity",
+                f"{fixed[0].quantity!r} is fixed by the base's swimming.speed_m_s = "
                 f"{base.swimming.speed_m_s:g} (a flume's speed): unset it for the "
                 "self-propelled speed",
             )
@@ -550,10 +553,10 @@ def _check_swimming(study: Study, kind: str, fluid: str) -> None:
     """A swimming base case answers its summary's keys and the modal keys; the swimming keys
     need such a base. One line naming the objective."""
     swimming_only = set(SWIMMING_QUANTITIES) - set(LINEAR_QUANTITIES)
-    for i, o in enumerate(study.objectives, 1):
+    for o in study.objectives:
         match = _INDEXED.match(o.quantity)
         name = match.group(1) if match else o.quantity
-        where = f"[[objectives]] {i} quantity"
+        where = f"{o.where} quantity"
         if kind != "swimming" and name in swimming_only:
             _fail(where, f'{o.quantity!r} needs a swimming base case (analysis.kind = "swimming")')
         modal = name in (*MODAL_QUANTITIES, "mean_voltage_buckling_factor")
