@@ -275,14 +275,19 @@ def side_force_and_moment(
     slip_rad: float = 0.0,
     yaw_rate_rad_s: float = 0.0,
     crossflow_drag_coefficient: float = 0.0,
+    lateral_velocity_m_s: float = 0.0,
 ) -> YawLoad:
     """The mean side force and yaw moment of the module docstring, with the body slipped by
-    ``slip_rad`` and turning at ``yaw_rate_rad_s`` about +y through ``x_ref_m``."""
+    ``slip_rad`` and turning at ``yaw_rate_rad_s`` about +y through ``x_ref_m``.
+    ``lateral_velocity_m_s``: the body's own sway velocity (+z): at a forward speed V the
+    slip v / V (the same stream met at an angle), at rest a cross flow (a start from rest)."""
     x, b, h = (np.asarray(v, dtype=float) for v in (x, half_height, h))
     v = float(speed_m_s)
+    if v > 0:
+        slip_rad, lateral_velocity_m_s = slip_rad + lateral_velocity_m_s / v, 0.0
     area = added_mass_per_length(b, density_kg_m3, added_mass_coefficient)
     r = x - x_ref_m
-    w_turn = -yaw_rate_rad_s * r
+    w_turn = lateral_velocity_m_s - yaw_rate_rad_s * r
     h_x = np.gradient(h, x, axis=1, edge_order=2) + slip_rad
     w = periodic_derivative(h, dt_s) + v * h_x + w_turn
     w_mean = w.mean(axis=0)

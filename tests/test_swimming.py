@@ -195,6 +195,23 @@ def test_turning_flips_with_the_mirrored_drive_and_vanishes_without_a_mean_bend(
     assert turning_of(1.0, 0.0) == pytest.approx(0.0, abs=1e-9 * abs(right))
 
 
+def test_a_sway_velocity_at_speed_is_the_slip_it_makes():
+    """The body swaying at v while it swims at V meets the stream at the angle v / V: the same
+    mean side force and yaw moment as the slip (benchmarks/turning_start.py relies on it)."""
+    from fluid_adapter.swimming import side_force_and_moment
+
+    x = np.linspace(0.0, 0.17, 60)
+    b = 0.02 + 0.01 * np.sin(np.pi * x / 0.17)
+    dt, h = travelling_wave(x, a=0.004)
+    h = h + 0.05 * x**2  # a mean bend: a side force to cancel
+    common = dict(speed_m_s=0.6, x_ref_m=0.06, density_kg_m3=RHO, yaw_rate_rad_s=-0.15)
+    slipped = side_force_and_moment(x, b, h, dt, slip_rad=0.03, **common)
+    swaying = side_force_and_moment(x, b, h, dt, lateral_velocity_m_s=0.6 * 0.03, **common)
+    assert swaying.side_force_n == pytest.approx(slipped.side_force_n, rel=1e-12)
+    assert swaying.yaw_moment_nm == pytest.approx(slipped.yaw_moment_nm, rel=1e-12)
+    assert abs(slipped.side_force_n) > 1e-4  # not 0 = 0
+
+
 def test_at_a_low_speed_a_symmetric_drive_does_not_turn_and_a_bent_tail_turns_its_way():
     """At 0.05 m/s the yaw balance near 0 is unstable (the moment grows with the rate); the
     symmetric motion's N is 0 exactly, and a bent tail turns toward its bend on the stable
