@@ -16,7 +16,10 @@ F and N are the mean side force and the moment int (x - x_r) l dx of side_force_
 physical yaw torque about +y is -N), T Lighthill's thrust, D the body's drag, m22, m26, m66 the
 strips' added masses int A r^k dx and I the plate's own yaw inertia. The periodic motion at each
 speed is interpolated from a grid of speeds. Quasi-steady: the mean loads of each period act at
-once.
+once. At a forward speed the sway velocity v enters the loads as the slip v / U of the steady
+model (the same stream met at an angle), whose forces lie along and across the path: written
+in body axes they leave out (T - D) v / U across it, nothing in the steady turn and little
+while the fish gathers speed (v is still small then).
 
     python benchmarks/turning_start.py          # about 1 min on 2 cores
 """
@@ -41,7 +44,11 @@ from fishfsi.cli.linear import (  # noqa: E402
 )
 from fishfsi.cli.swimming import _mass_and_volume, swimming_model  # noqa: E402
 from fluid_adapter.slender_body import added_mass_per_length  # noqa: E402
-from fluid_adapter.swimming import mean_thrust, side_force_and_moment  # noqa: E402
+from fluid_adapter.swimming import (  # noqa: E402
+    mean_pressure_thrust,
+    mean_thrust,
+    side_force_and_moment,
+)
 from fsi_orchestrator.case import load_case  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -112,7 +119,8 @@ def manoeuvre(case_dir: Path, overrides: tuple[str, ...]) -> dict:
             crossflow_drag_coefficient=swim.crossflow_drag_coefficient,
             **fluid,
         )
-        surge = mean_thrust(x, swim.half_height_m, h, dt, max(speed, 0.0), **fluid)
+        thrust = mean_pressure_thrust if swim.pressure_thrust else mean_thrust
+        surge = thrust(x, swim.half_height_m, h, dt, max(speed, 0.0), **fluid)
         surge -= swim.drag.total(max(speed, 0.0))
         return yaw.side_force_n, yaw.yaw_moment_nm, surge
 
@@ -126,10 +134,8 @@ def manoeuvre(case_dir: Path, overrides: tuple[str, ...]) -> dict:
     rate_deg = np.degrees(run.y[2])
     peak = int(np.argmax(np.abs(rate_deg)))
 
-    # the steady turn's stability: sway and yaw linearized about it at its speed
-    speed = float(steady["swimming_speed_m_s"])
-    sway0 = speed * np.radians(float(steady["slip_deg"]))
-    rate0 = np.radians(float(steady["turning_rate_deg_s"]))
+    # the steady turn's stability: sway and yaw linearized about where the start ends
+    speed, sway0, rate0 = (float(v) for v in run.y[:, -1])
 
     def lateral(sway: float, rate: float) -> np.ndarray:
         side, moment, _ = loads(speed, sway, rate)
@@ -146,7 +152,7 @@ def manoeuvre(case_dir: Path, overrides: tuple[str, ...]) -> dict:
     within = run.t <= 1.0
     return {
         "steady_rate_deg_s": float(steady["turning_rate_deg_s"]),
-        "steady_speed_m_s": speed,
+        "steady_speed_m_s": float(steady["swimming_speed_m_s"]),
         "peak_rate_deg_s": float(rate_deg[peak]),
         "peak_at_s": float(run.t[peak]),
         "rate_at_1s_deg_s": float(np.interp(1.0, run.t, rate_deg)),

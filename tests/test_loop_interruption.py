@@ -91,3 +91,53 @@ def test_a_failure_while_asked_to_stop_is_the_stop_and_otherwise_a_failure(tmp_p
     )
     with pytest.raises(RuntimeError, match="exit 1"):
         run(tmp_path / "not_asked", 3, failed)
+
+
+# fsi-run: what a Ctrl-C outside the windows says it keeps (the command's word, not the loop's)
+
+
+def _stop_run(monkeypatch, tmp_path, case, *flags, writes_checkpoint=False, error=None):
+    from fishfsi.cli import run as run_cli
+
+    output = tmp_path / "out"
+
+    def stopped(*args, **kwargs):
+        if writes_checkpoint:
+            (output / "checkpoint.h5").write_bytes(b"")
+        raise error or KeyboardInterrupt
+
+    monkeypatch.setattr(run_cli, "execute", stopped)
+    return run_cli.main([str(case), "--output", str(output), "--quiet", *flags]), output
+
+
+def test_a_dynamic_run_stopped_in_its_set_up_says_what_it_keeps(tmp_path, capsys, monkeypatch):
+    import os
+    from pathlib import Path
+
+    dynamic = Path(__file__).resolve().parents[1] / "cases" / "fixed_head_3Hz"
+    code, out = _stop_run(monkeypatch, tmp_path / "a", dynamic)
+    assert code == 130
+    assert capsys.readouterr().err == (
+        "interrupted: stopped before the first checkpoint: nothing to resume; run it again\n"
+    )
+    # --overwrite over an earlier run: its checkpoint is older than this run, and stays its
+    (tmp_path / "b" / "out").mkdir(parents=True)
+    (tmp_path / "b" / "out" / "checkpoint.h5").write_bytes(b"")
+    os.utime(tmp_path / "b" / "out" / "checkpoint.h5", (1e9, 1e9))
+    code, _ = _stop_run(monkeypatch, tmp_path / "b", dynamic, "--overwrite")
+    assert code == 130 and "the earlier run in the folder is as it was" in capsys.readouterr().err
+    # a checkpoint this run wrote is continued
+    (tmp_path / "c" / "out").mkdir(parents=True)
+    code, _ = _stop_run(monkeypatch, tmp_path / "c", dynamic, writes_checkpoint=True)
+    assert code == 130 and capsys.readouterr().err.endswith("continue with --resume\n")
+
+
+def test_a_stopped_solver_in_a_run_without_checkpoints_says_to_run_it_again(
+    tmp_path, capsys, monkeypatch
+):
+    from pathlib import Path
+
+    modal = Path(__file__).resolve().parents[1] / "cases" / "swim_original_18Hz"
+    code, _ = _stop_run(monkeypatch, tmp_path, modal, error=ParticipantStopped(STOPPED))
+    assert code == 130
+    assert capsys.readouterr().err == f"interrupted: {STOPPED}; nothing was written; run it again\n"

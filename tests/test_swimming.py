@@ -195,21 +195,24 @@ def test_turning_flips_with_the_mirrored_drive_and_vanishes_without_a_mean_bend(
     assert turning_of(1.0, 0.0) == pytest.approx(0.0, abs=1e-9 * abs(right))
 
 
-def test_a_sway_velocity_at_speed_is_the_slip_it_makes():
-    """The body swaying at v while it swims at V meets the stream at the angle v / V: the same
-    mean side force and yaw moment as the slip (benchmarks/turning_start.py relies on it)."""
+def test_a_plate_swaying_at_speed_carries_jones_slender_wing_lift():
+    """A rigid plate of constant height 2b swimming at V and swaying at v meets the stream at
+    the incidence v / V: Jones' slender-wing lift F = -rho pi b^2 V v (R. T. Jones 1946, NACA
+    Report 835), up to the trailing edge's third-order tilt (v / V)^2 / 2."""
     from fluid_adapter.swimming import side_force_and_moment
 
     x = np.linspace(0.0, 0.17, 60)
-    b = 0.02 + 0.01 * np.sin(np.pi * x / 0.17)
-    dt, h = travelling_wave(x, a=0.004)
-    h = h + 0.05 * x**2  # a mean bend: a side force to cancel
-    common = dict(speed_m_s=0.6, x_ref_m=0.06, density_kg_m3=RHO, yaw_rate_rad_s=-0.15)
-    slipped = side_force_and_moment(x, b, h, dt, slip_rad=0.03, **common)
-    swaying = side_force_and_moment(x, b, h, dt, lateral_velocity_m_s=0.6 * 0.03, **common)
-    assert swaying.side_force_n == pytest.approx(slipped.side_force_n, rel=1e-12)
-    assert swaying.yaw_moment_nm == pytest.approx(slipped.yaw_moment_nm, rel=1e-12)
-    assert abs(slipped.side_force_n) > 1e-4  # not 0 = 0
+    b = np.full_like(x, 0.03)
+    h = np.zeros((16, x.size))  # no undulation
+    speed, sway = 0.6, 0.01
+    load = side_force_and_moment(
+        x, b, h, 1e-3, speed_m_s=speed, x_ref_m=0.06, density_kg_m3=RHO, lateral_velocity_m_s=sway
+    )
+    jones = -RHO * np.pi * 0.03**2 * speed * sway
+    assert load.side_force_n == pytest.approx(jones, rel=2 * (sway / speed) ** 2)
+    # Jones: the lift acts where the span grows, here all at the blunt nose, 0.06 m ahead of
+    # the reference point (N = int (x - x_r) l dx)
+    assert load.yaw_moment_nm == pytest.approx(-0.06 * jones, rel=2 * (sway / speed) ** 2)
 
 
 def test_at_a_low_speed_a_symmetric_drive_does_not_turn_and_a_bent_tail_turns_its_way():
@@ -379,6 +382,8 @@ def test_a_swimming_sweeps_table_shows_the_speed_not_the_thrust(capsys):
     assert "tip at speed 3.50 mm, speed 1.42 m/s" in sweep.progress_line(at_speed, 0.5, 1, 2)
     strong = {**held, "slender_body_mean_thrust_n": 1.0}
     assert "tip amplitude 8.10 mm, thrust 1000 mN" in sweep.progress_line(strong, 0.5, 1, 2)
+    shown = [sweep._figure(v, "3s") for v in (9.996, 12345.6, -0.0, 1e-15, -3.456)]
+    assert shown == ["10.0", "12300", "0", "1e-15", "-3.46"]
 
 
 def test_sweep_rows_carry_the_swimming_columns(square_curves):

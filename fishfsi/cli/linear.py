@@ -45,12 +45,15 @@ def linear_sweep(
     done: frozenset[str] | set[str] = frozenset(),
     on_row: OnRow | None = None,
     notes: bool = True,
+    refuse_a_bad_speed: bool = False,
 ) -> list[dict]:
     """The rows of the points not ``done`` (point_name), each handed to ``on_row`` as it is
     finished. A step without a finite answer (a singular or indefinite tangent about the
     mean-voltage equilibrium) raises SweepError naming the step; a point whose response is
     not finite is a failed row. ``notes``: say on stderr when the response leaves small
-    deflections."""
+    deflections. ``refuse_a_bad_speed``: a prescribed swimming.speed_m_s past the motion's
+    divergence speed is CaseError (fsi-run); otherwise each point fails alone (a sweep's
+    folder is prepared by then)."""
     jobs = [(w, f) for w in waveforms for f in frequencies if point_name(w, f) not in done]
     if not jobs:
         return []
@@ -70,7 +73,8 @@ def linear_sweep(
             max_speed_m_s=linear.divergence_speed_m_s,
             added_mass_coefficient=linear.section_added_mass_coefficient,
         )
-        refuse_a_speed_past_divergence(swim)
+        if refuse_a_bad_speed:
+            refuse_a_speed_past_divergence(swim)
     pushes = case.fluid.model is not FluidModel.NONE  # in vacuum nothing is pushed
     length = float(np.ptp(model.mesh.nodes[:, 0]))
     rows = []
@@ -236,7 +240,7 @@ def swimming_summary(case: Case, say_notes: bool = True) -> dict:
     ``notes`` (where the figures leave the model's reach; said on stderr with ``say_notes``)."""
     start = time.perf_counter()
     a = case.actuation
-    rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform])
+    rows = linear_sweep(without_cfd(case), [a.frequency_hz], [a.waveform], refuse_a_bad_speed=True)
     row = rows[0]
     if not row["status"].startswith("ok"):
         raise SweepError(f"swimming: {row['status'].removeprefix('failed: ')}")

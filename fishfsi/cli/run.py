@@ -712,14 +712,17 @@ def _body(args: argparse.Namespace) -> int:
     replaced: list[str] = []
     if keep and case.analysis.kind is not AnalysisKind.DYNAMIC:
         replaced = _refuse_an_earlier_run(output, case.analysis.kind, args)
+    earlier = _stamp(output / CHECKPOINT_FILE)  # an earlier run's checkpoint, if any
     try:
         summary = execute(case, output, args.resume, args.overwrite, not args.quiet, args.overrides)
     except KeyboardInterrupt as err:
         from fsi_orchestrator.participant import ParticipantStopped
 
-        if str(err) or isinstance(err, ParticipantStopped):  # the loop's own word
-            raise
-        raise KeyboardInterrupt(_what_an_interrupt_keeps(case, output)) from None
+        dynamic = case.analysis.kind is AnalysisKind.DYNAMIC
+        if dynamic and str(err) and not isinstance(err, ParticipantStopped):
+            raise  # the window loop's own word: what it checkpointed
+        kept = _what_an_interrupt_keeps(case, output, resumed=args.resume, earlier=earlier)
+        raise KeyboardInterrupt(f"{err}; {kept}" if str(err) else kept) from None
     emit(summary, args.json)
     for name in replaced:  # a dynamic run's files, which this summary does not describe
         path = output / name
@@ -762,14 +765,35 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
     return [n for n in (RESULTS_FILE, CHECKPOINT_FILE, "vtk") if n in held]
 
 
-def _what_an_interrupt_keeps(case: Case, output: Path) -> str:
-    """What a Ctrl-C outside the windows leaves: a modal, static or swimming run writes
-    nothing until its answer; a dynamic run keeps its last checkpoint, if it has one."""
+def _stamp(path: Path) -> float | None:
+    try:
+        return path.stat().st_mtime_ns
+    except OSError:
+        return None
+
+
+def _what_an_interrupt_keeps(
+    case: Case, output: Path, *, resumed: bool, earlier: float | None
+) -> str:
+    """What a Ctrl-C outside the windows leaves. A modal, static or swimming run writes nothing
+    until its answer (a flume, its OpenFOAM case); a dynamic run keeps its last checkpoint if
+    this run wrote one or continued one (an --overwrite stopped in its set-up leaves the
+    earlier run as it was)."""
     if case.analysis.kind is not AnalysisKind.DYNAMIC:
+        if (output / "fluid").is_dir() and case.fluid.model is FluidModel.OPENFOAM:
+            return (
+                f"no forces were written ({output / 'fluid'} holds the flume so far); run it again"
+            )
         return "nothing was written; run it again"
-    if not (output / CHECKPOINT_FILE).is_file():
-        return "stopped before the first checkpoint: nothing to resume; run it again"
-    return "the results up to the last checkpoint are kept; continue with --resume"
+    now = _stamp(output / CHECKPOINT_FILE)
+    if now is not None and (resumed or now != earlier):  # continued, or written by this run
+        return "the results up to the last checkpoint are kept; continue with --resume"
+    if now is not None:
+        return (
+            "stopped before this run's first checkpoint; the earlier run in the folder is as "
+            "it was: run it again with --overwrite to replace it"
+        )
+    return "stopped before the first checkpoint: nothing to resume; run it again"
 
 
 # a Ctrl-C outside the windows (or a second one); SIGTERM or a first Ctrl-C in the windows

@@ -1041,8 +1041,10 @@ def _figure(value: float | None, spec: str, scale: float = 1.0) -> str:
         return "-"
     value = scale * value
     if spec == "3s":
-        digits = 2 - int(np.floor(np.log10(abs(value)))) if value else 2
-        return f"{value:.{max(digits, 0)}f}"
+        if value == 0 or not 1e-4 <= abs(value) < 1e6:  # round-off, or far from a log's scale
+            return "0" if value == 0 else format(value, ".3g")
+        value = float(f"{value:.3g}")  # 9.996 -> 10.0, not 10.00
+        return f"{value:.{max(2 - int(np.floor(np.log10(abs(value)))), 0)}f}"
     return format(value, spec)
 
 
