@@ -765,7 +765,7 @@ def _refuse_an_earlier_run(output: Path, kind: AnalysisKind, args: argparse.Name
     return [n for n in (RESULTS_FILE, CHECKPOINT_FILE, "vtk") if n in held]
 
 
-def _stamp(path: Path) -> float | None:
+def _stamp(path: Path) -> int | None:
     try:
         return path.stat().st_mtime_ns
     except OSError:
@@ -773,7 +773,7 @@ def _stamp(path: Path) -> float | None:
 
 
 def _what_an_interrupt_keeps(
-    case: Case, output: Path, *, resumed: bool, earlier: float | None
+    case: Case, output: Path, *, resumed: bool, earlier: int | None
 ) -> str:
     """What a Ctrl-C outside the windows leaves. A modal, static or swimming run writes nothing
     until its answer (a flume, its OpenFOAM case); a dynamic run keeps its last checkpoint if
