@@ -261,7 +261,7 @@ def plot_sweep(csv_path: Path, output: Path, mesh_reference: Path | None = None)
         ref_rows, ref_identity = read_sweep(mesh_reference)
         check_mesh_reference(identity, ref_identity, mesh_reference)
     fig, (ax_amp, ax_thrust) = plt.subplots(2, 1, figsize=(6.5, 6.5), sharex=True)
-    swimming = any("swimming_speed_m_s" in r for r in rows)
+    swimming = any(SWIMMING_KEYS[0] in r for r in rows)  # a swimming case's sweep
     if is_original_fish(identity):
         overlay_seed(ax_amp, ax_thrust, head_support(identity))
     table = []
