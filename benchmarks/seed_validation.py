@@ -50,7 +50,11 @@ from solid_adapter.build import (  # noqa: E402
     mean_voltage_modal_sweep,
     static_loads,
 )
-from solid_adapter.harmonic import damped_sweep_response, sweep_response  # noqa: E402
+from solid_adapter.harmonic import (  # noqa: E402
+    damped_sweep_response,
+    mean_voltage_tangent,
+    sweep_response,
+)
 from solid_adapter.piezo import DriveSignal  # noqa: E402
 from solid_adapter.shell import NDOF  # noqa: E402
 from solid_adapter.solvers import modal_analysis, mode_kind  # noqa: E402
@@ -142,9 +146,17 @@ class FastModel:
         )
         return {"tip_mm": 1e3 * float(np.ptp(h[:, -1]) / 2), "thrust_n": float(thrust)}
 
-    def bending_modes(self, case, count: int = 3) -> list[float]:
+    def bending_modes(self, case, count: int = 3, about_mean_voltage: bool = False) -> list[float]:
+        """The first wet bending modes (fsi-modal's wet_hz); ``about_mean_voltage``: about the
+        static state under the drive's mean voltages, with their prestress, as the seed's
+        robots were driven when it read their modes (fsi-modal's wet_hz_at_mean_voltage)."""
         model = self.model(case)
-        result = modal_analysis(model, 4 * count + 2)
+        stiffness = None
+        if about_mean_voltage:
+            drive = DriveSignal.from_case(case)
+            x_static = mean_voltage_equilibrium(case, model, drive, static_loads(case, model))
+            stiffness = mean_voltage_tangent(model, x_static, drive)
+        result = modal_analysis(model, 4 * count + 2, stiffness=stiffness)
         found = [
             float(f)
             for f, s in zip(result.frequencies_hz, result.shapes, strict=True)
@@ -339,6 +351,41 @@ def sensitivity(fast: FastModel, w: float, length: float) -> list[dict]:
     return rows
 
 
+# shares of the drive's mean induced strain that the laminate holds (actuation.mean_strain_transfer)
+MEAN_HELD = (0.0, 0.25, 0.4, 0.5, 0.6, 1.0)
+
+
+def mean_strain_held(fast: FastModel, w: float) -> list[dict]:
+    """The free robots' first two wet bending modes about the mean voltages' equilibrium, per
+    share of the mean strain held, the same on all three (the same MFCs and bond). None where
+    that mean buckles the plate: the factor it does so at instead."""
+    from fsi_orchestrator.case import CaseError
+
+    spacing = f"actuation.electrode_spacing_m={float(w)!r}"
+    rows = []
+    for held_share in MEAN_HELD:
+        row: dict = {"mean_strain_transfer": held_share}
+        for robot, name in CASE_OF.items():
+            free = case(
+                name,
+                spacing,
+                "boundary.head=free",
+                f"actuation.mean_strain_transfer={held_share!r}",
+            )
+            try:
+                row[robot] = fast.bending_modes(free, 2, about_mean_voltage=True)
+            except CaseError as err:  # the mean buckles it: say at which share
+                row[robot] = None
+                row[f"{robot}_buckles_at"] = held_share * _buckling_factor_in(str(err))
+        rows.append(row)
+    return rows
+
+
+def _buckling_factor_in(message: str) -> float:
+    """The factor of check_mean_voltage's one line ("... buckles the plate at 0.64 of ...")."""
+    return float(message.split("buckles the plate at ")[1].split()[0])
+
+
 def mesh_convergence(fast: FastModel, w: float) -> list[dict]:
     """First wet bending mode of the three free robots per shell mesh level, with the columns
     graded to the outline (the product) and uniform (as before the grading), fluid coarse."""
@@ -382,7 +429,13 @@ def _pct(model: float, reference: float) -> str:
 
 
 def report(
-    cal: dict, pred: dict, sens: list[dict], conv: list[dict], wall_s: float, evaluations: int
+    cal: dict,
+    pred: dict,
+    sens: list[dict],
+    conv: list[dict],
+    wall_s: float,
+    evaluations: int,
+    held_mean: list[dict],
 ) -> str:
     lines = [
         START,
@@ -474,6 +527,28 @@ def report(
         )
     lines += [
         "",
+        "**The mean strain held** (`actuation.mean_strain_transfer`, the same share on all "
+        "three robots; the cases hold 1, 1 and 0): the first two wet bending modes of the free "
+        "robots about the equilibrium under the drive's mean voltages, with its prestress, as "
+        "the robots were driven when the seed read their modes (`fsi-modal`'s "
+        "`wet_hz_at_mean_voltage`):",
+        "",
+        "| share held | original f1 / f2 [Hz] | serial f1 / f2 [Hz] | integrative f1 / f2 [Hz] |",
+        "|---|---|---|---|",
+    ]
+    for row in held_mean:
+        cells = []
+        for robot in CASE_OF:
+            modes = row[robot]
+            if modes is None:
+                cells.append(f"buckles at {row[f'{robot}_buckles_at']:.2f} held")
+            else:
+                cells.append(" / ".join(f"{f:.2f}" for f in modes))
+        lines.append(f"| {row['mean_strain_transfer']:g} | " + " | ".join(cells) + " |")
+    measured = [" / ".join(f"{f:g}" for f in BENDING[robot][1][:2]) for robot in CASE_OF]
+    lines.append("| measured | " + " | ".join(measured) + " |")
+    lines += [
+        "",
         "**Mesh convergence** (first wet bending mode, free, fluid coarse; the shell levels "
         "have 8 x 2, 16 x 4 and 32 x 8 elements before the columns are split at the layout's "
         "edges):",
@@ -513,13 +588,15 @@ def main() -> None:
     pred = predictions(fast, cal["electrode_spacing_m"], cal["clamp_length_m"])
     sens = sensitivity(fast, cal["electrode_spacing_m"], cal["clamp_length_m"])
     conv = mesh_convergence(fast, cal["electrode_spacing_m"])
+    held_mean = mean_strain_held(fast, cal["electrode_spacing_m"])
     wall = time.perf_counter() - start
-    text = report(cal, pred, sens, conv, wall, fast.evaluations)
+    text = report(cal, pred, sens, conv, wall, fast.evaluations, held_mean)
     if args.write_docs:
         write_docs(text)
     if args.json:
         summary = {"calibration": cal, "predictions": pred, "sensitivity": sens}
-        print(json.dumps({**summary, "mesh_convergence": conv}, indent=1))
+        summary |= {"mesh_convergence": conv, "mean_strain_held": held_mean}
+        print(json.dumps(summary, indent=1))
     else:
         print(text)
 

@@ -366,3 +366,31 @@ def test_a_swimming_study_evaluates_fsi_runs_swimming_figures(tmp_path, capsys):
     bad = write_study(tmp_path / "bad", transient)
     assert design_cli.main([str(bad), "--output", str(tmp_path / "bad_out")]) == 2
     assert "method.evaluation" in capsys.readouterr().err
+
+
+def test_a_modal_study_can_ask_for_the_modes_about_the_mean_voltage(tmp_path, capsys):
+    """`wet_hz_at_mean_voltage[0]` is fsi-modal's figure for each design (the beam's first wet
+    mode about its mean voltage's bent state); with none of the mean strain held it is the
+    flat plate's `wet_hz[0]`, to the digit."""
+    from fishfsi.cli.modal import modal_summary
+
+    text = STUDY.replace('key = "actuation.frequency_hz"', 'key = "actuation.mean_strain_transfer"')
+    text = text.replace("low = 2.0\nhigh = 6.0", "low = 0.0\nhigh = 1.0")
+    text = text.replace('expression = "actuation.frequency_hz <= 5"', 'expression = "1 > 0"')
+    text = text.replace('quantity = "tip_amplitude_m"', 'quantity = "wet_hz_at_mean_voltage[0]"')
+    text = text.replace("points = 3", "points = 2")
+    run_json(capsys, str(write_study(tmp_path / "modal", text)), "--output", str(tmp_path / "o"))
+    rows = rows_of(tmp_path / "o")
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    for row in rows:
+        share = float(row["actuation.mean_strain_transfer"])
+        case = load_case(BEAM, ["mesh.level=coarse", f"actuation.mean_strain_transfer={share!r}"])
+        expected = modal_summary(case)
+        assert float(row["wet_hz_at_mean_voltage[0]"]) == pytest.approx(
+            expected["wet_hz_at_mean_voltage"][0], rel=1e-9
+        )
+        driven, flat = expected["wet_hz_at_mean_voltage"][0], expected["wet_hz"][0]
+        if share == 0.0:
+            assert driven == flat
+        else:  # the unimorph bent by its mean: 4e-4 stiffer, which the figure must carry
+            assert driven != pytest.approx(flat, rel=1e-5)

@@ -96,6 +96,20 @@ def test_a_prescribed_speed_past_the_divergence_is_refused_in_one_line(capsys):
     assert "swimming.speed_m_s = 5 is past the plate's divergence speed (4.07 m/s)" in err
 
 
+def test_a_swimming_sweep_whose_every_point_failed_keeps_its_swimming_table(tmp_path, capsys):
+    """fsi-sweep fails each point past the divergence speed alone (its folder is prepared by
+    then); with every point failed, the table is still the swimming case's, not a held
+    fish's thrust."""
+    argv = [str(CASE), "--frequencies", "18", "--waveforms", "square", "--set", "mesh.level=coarse"]
+    code = sweep.main([*argv, "--set", "swimming.speed_m_s=5", "--output", str(tmp_path / "s")])
+    out, err = capsys.readouterr()
+    assert code == 1 and "1 of 1 points failed" in err
+    header, row = out.splitlines()[:2]
+    assert "speed [m/s]" in header and "body lengths/s" in header and "thrust" not in header
+    assert "failed: swimming.speed_m_s = 5 is past the plate's divergence speed" in row
+    assert "speed - m/s" in err  # the progress line too
+
+
 def test_at_no_forward_speed_nothing_turns_nor_slips(capsys):
     """A flume at 0 m/s: no path to turn along, so the right-turn drive reports no turn, no
     sideslip and no note of a tight turn (the radius V / Omega had read 0 / 0)."""
@@ -238,9 +252,13 @@ def fsi_run(capsys, *overrides: str) -> tuple[int, str, str]:
 
 @pytest.fixture(scope="module")
 def original_runs():
-    """The shipped case with the seed's right-turn drive (~15 s)."""
+    """The shipped case with the seed's right-turn drive, and with the left MFC alone
+    (~25 s)."""
     results = {}
-    for name, overrides in (("right_turn", (RIGHT_TURN,)),):
+    for name, overrides in (
+        ("right_turn", (RIGHT_TURN,)),
+        ("left_mfc_alone", ("actuation.right_volts=[0.0, 0.0]",)),
+    ):
         case = load_case(CASE, overrides)
         results[name] = swimming_summary(case)
     return results
@@ -298,6 +316,16 @@ def test_a_symmetric_drive_does_not_turn_at_a_low_prescribed_speed(capsys):
 
 def test_the_seeds_right_turn_turns_right(original_runs):
     assert original_runs["right_turn"]["turning_rate_deg_s"] < 0
+
+
+def test_the_left_mfc_alone_turns_right_more_slowly_than_the_seeds_turning_drive(original_runs):
+    """Sec. 3.6: with one MFC at -500..+1500 V and the other at 0 V the robot turns, but
+    more slowly than with the other at -500..+500 V. Both drives bend it alike on average
+    (the same 500 V of mean difference); the lone MFC swings the tail less, so the fish
+    swims and turns more slowly (model: 7.0 against 8.8 deg/s)."""
+    alone, turning = original_runs["left_mfc_alone"], original_runs["right_turn"]
+    assert turning["turning_rate_deg_s"] < alone["turning_rate_deg_s"] < 0
+    assert alone["swimming_speed_m_s"] < turning["swimming_speed_m_s"]
 
 
 @pytest.mark.xfail(

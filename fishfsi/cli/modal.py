@@ -12,7 +12,9 @@ from .fast_model import shell_with_fast_fluid, without_cfd
 from .progress import RunProgress
 
 
-def modal_summary(case, progress: RunProgress | None = None) -> dict:
+def modal_summary(case, progress: RunProgress | None = None, at_mean_voltage: bool = True) -> dict:
+    """fsi-modal's summary; ``at_mean_voltage``: with the wet modes about the mean voltages'
+    equilibrium (a static solve more), which a design study skips unless it asks for them."""
     from solid_adapter.buckling import buckling_factor
     from solid_adapter.build import has_actuators
     from solid_adapter.piezo import DriveSignal
@@ -31,27 +33,54 @@ def modal_summary(case, progress: RunProgress | None = None) -> dict:
     def modes(result) -> tuple[list[float], list[str]]:
         return (result.frequencies_hz.tolist(), [mode_kind(model, s) for s in result.shapes])
 
-    wet = None
+    wet = driven = None
+    drive = DriveSignal.from_case(case) if has_actuators(case) else None
+    factor = float("inf")
+    if drive is not None:
+        # the load factor at which the drive's mean voltage buckles the flat plate (> 1: held)
+        with progress.phase("mean-voltage buckling factor"):
+            factor = buckling_factor(model, drive.mean)
     if added is not None:
         with progress.phase(f"wet modes ({n})"):
             wet = modal_analysis(model, n)
+        if at_mean_voltage and drive is not None and factor > 1.0:
+            with progress.phase("wet modes about the mean voltages' equilibrium"):
+                driven = wet_modes_about_mean_voltage(case, model, drive, n, wet)
     model.set_added_mass(None)
     summary: dict = {}
     with progress.phase(f"dry modes ({n})"):
         summary["dry_hz"], summary["dry_kinds"] = modes(modal_analysis(model, n))
     if wet is not None:
         summary["wet_hz"], summary["wet_kinds"] = modes(wet)
+        # a driven robot's modes (what a camera sees while it swims): the mean voltages'
+        # prestress lowers them where it nears buckling (null: the mean buckles the plate)
+        if drive is None:
+            summary["wet_hz_at_mean_voltage"] = summary["wet_hz"]
+        elif at_mean_voltage:
+            summary["wet_hz_at_mean_voltage"] = None if driven is None else modes(driven)[0]
         summary["added_mass_kg"] = added.total()
         summary["plate_mass_kg"] = model.total_mass_kg()
         summary["fluid_nodes"] = added.n_fluid_nodes
-    if has_actuators(case):
-        # the load factor at which the drive's mean voltage buckles the flat plate (> 1: held)
+    if drive is not None:
         # (null: the mean prestress does not buckle it at any factor)
-        with progress.phase("mean-voltage buckling factor"):
-            factor = buckling_factor(model, DriveSignal.from_case(case).mean)
         summary["mean_voltage_buckling_factor"] = factor if factor < float("inf") else None
     summary["wall_s"] = time.perf_counter() - start
     return summary
+
+
+def wet_modes_about_mean_voltage(case, model, drive, n: int, flat):
+    """The wet modes about the static state under the drive's mean voltages, with their
+    prestress; the flat plate's (``flat``) where the mean is 0."""
+    import numpy as np
+
+    from solid_adapter.build import mean_voltage_equilibrium, static_loads
+    from solid_adapter.harmonic import mean_voltage_tangent
+    from solid_adapter.solvers import modal_analysis
+
+    if not np.any(drive.mean):
+        return flat
+    x_static = mean_voltage_equilibrium(case, model, drive, static_loads(case, model))
+    return modal_analysis(model, n, stiffness=mean_voltage_tangent(model, x_static, drive))
 
 
 def _body(args: argparse.Namespace) -> int:

@@ -1048,31 +1048,34 @@ def _figure(value: float | None, spec: str, scale: float = 1.0) -> str:
     return format(value, spec)
 
 
-def _tip_key(rows: list[dict]) -> tuple[str, str]:
+def _tip_key(rows: list[dict], swimming: bool | None = None) -> tuple[str, str]:
     """The tail amplitude a sweep's table shows, and its header: a swimming sweep's at the
     swimming speed where its rows carry it (swimming.speed_coupling), else in still liquid."""
-    if _swimming(rows):
+    if _swimming(rows, swimming):
         if any("tip_amplitude_at_speed_m" in r for r in rows):
             return "tip_amplitude_at_speed_m", "tip at speed [mm]"
         return "tip_amplitude_m", "tip, still liquid [mm]"
     return "tip_amplitude_m", "tip amplitude [mm]"
 
 
-def _swimming(rows: list[dict]) -> bool:
+def _swimming(rows: list[dict], swimming: bool | None = None) -> bool:
     """A swimming case's sweep: its figure is the free fish's speed, not a held fish's
-    thrust (a failed point's row may lack the swimming columns)."""
-    return any(SWIMMING_KEYS[0] in r for r in rows)
+    thrust. ``swimming``: what the case says; else told by the rows (a failed point's row
+    may lack the swimming columns)."""
+    return swimming if swimming is not None else any(SWIMMING_KEYS[0] in r for r in rows)
 
 
-def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
+def progress_line(
+    row: dict, wall_s: float, finished: int, total: int, swimming: bool | None = None
+) -> str:
     """One finished point, for logs: ``sweep: point 3/26 sine 5 Hz: ...``."""
     thrust = _thrust(row)
     status = row.get("status", "ok")
     tail = "" if status == "ok" else f"; {status}"
     figure = "" if thrust is None else f"thrust {_milli(thrust, '3s')} mN, "
-    if _swimming([row]):
+    if _swimming([row], swimming):
         figure = f"speed {_figure(row.get('swimming_speed_m_s'), '3s')} m/s, "
-    key, header = _tip_key([row])
+    key, header = _tip_key([row], swimming)
     name = header.removesuffix(" [mm]")
     return (
         f"sweep: point {finished}/{total} {row['waveform']} {row['frequency_hz']:g} Hz: "
@@ -1080,10 +1083,10 @@ def progress_line(row: dict, wall_s: float, finished: int, total: int) -> str:
     )
 
 
-def print_table(rows: list[dict]) -> None:
-    swimming = _swimming(rows)
+def print_table(rows: list[dict], swimming: bool | None = None) -> None:
+    swimming = _swimming(rows, swimming)
     figures = f"{'speed [m/s]':>12} {'body lengths/s':>14}" if swimming else f"{'thrust [mN]':>12}"
-    tip, header = _tip_key(rows)
+    tip, header = _tip_key(rows, swimming)
     print(f"{'waveform':>8} {'f [Hz]':>7} {header:>22} {figures}  status")
     for r in rows:
         if swimming:
@@ -1101,6 +1104,7 @@ def _sweep(args: argparse.Namespace) -> int:
     comm = mpi_world()  # first: a mismatched launch stops before any work
     rank, size = (comm.Get_rank(), comm.Get_size()) if comm is not None else (0, 1)
     case = load(args)
+    swims = case.analysis.kind is AnalysisKind.SWIMMING  # its table, even if every point failed
     if case.geometry.kind is GeometryKind.RECTANGLE:
         raise CaseError(
             'case.toml: geometry.kind = "rectangle" carries no actuators for fsi-sweep to drive; '
@@ -1168,7 +1172,7 @@ def _sweep(args: argparse.Namespace) -> int:
     def on_row(name: str, row: dict, wall_s: float) -> None:
         finished = len(set(table.put(name, row)) & set(points))
         failed = row.get("status", "ok").startswith("failed")
-        line = progress_line(row, wall_s, finished, len(points))
+        line = progress_line(row, wall_s, finished, len(points), swims)
         say(
             line
             + (
@@ -1221,7 +1225,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.json:
         emit({"rows": rows, "wall_s": time.perf_counter() - start, "output": str(output)}, True)
     else:
-        print_table(rows)
+        print_table(rows, swims)
         print(f"wrote {output / 'sweep.csv'} ({time.perf_counter() - start:.1f} s)")
     failed = [r for r in rows if r.get("status", "ok").startswith("failed")]
     if failed:

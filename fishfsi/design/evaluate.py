@@ -301,7 +301,8 @@ def modal_figures(case: Case, objectives: tuple[Objective, ...]) -> dict:
     if needed and max(needed) > case.analysis.num_modes:
         analysis = dataclasses.replace(case.analysis, num_modes=max(needed))
         case = dataclasses.replace(case, analysis=analysis)
-    summary = modal_summary(case)
+    driven = any(_base_name(o.quantity) == "wet_hz_at_mean_voltage" for o in objectives)
+    summary = modal_summary(case, at_mean_voltage=driven)
     summary.pop("wall_s", None)
     return summary
 

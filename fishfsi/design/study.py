@@ -77,6 +77,7 @@ SCALAR_SUMMARY_KEYS = (
 LIST_SUMMARY_KEYS = (
     "dry_hz",
     "wet_hz",
+    "wet_hz_at_mean_voltage",
     "tip_displacement_m",
     "tip_amplitude_per_period_m",
     "mean_thrust_per_period_n",
@@ -499,7 +500,13 @@ def _load_study(path: Path) -> Study:
 
 # what the linear periodic response (and the modal path beside it) gives
 LINEAR_QUANTITIES = ("tip_amplitude_m", "mean_thrust_n", "slender_body_mean_thrust_n")
-MODAL_QUANTITIES = ("dry_hz", "wet_hz", "added_mass_kg", "plate_mass_kg")
+MODAL_QUANTITIES = (
+    "dry_hz",
+    "wet_hz",
+    "wet_hz_at_mean_voltage",
+    "added_mass_kg",
+    "plate_mass_kg",
+)
 # what a prescribed swimming.speed_m_s sets
 SPEED_QUANTITIES = ("swimming_speed_m_s", "body_lengths_per_s", "swimming_number")
 # what a swimming case's summary gives (the fast model's row at the case's drive)
