@@ -352,31 +352,37 @@ def sensitivity(fast: FastModel, w: float, length: float) -> list[dict]:
 
 
 # shares of the drive's mean induced strain that the laminate holds (actuation.mean_strain_transfer)
-MEAN_HELD = (0.0, 0.25, 0.4, 0.5, 0.6, 1.0)
+MEAN_HELD = (0.0, 0.25, 0.3, 0.4, 0.45, 0.5, 0.6, 1.0)
 
 
 def mean_strain_held(fast: FastModel, w: float) -> list[dict]:
-    """The free robots' first two wet bending modes about the mean voltages' equilibrium, per
-    share of the mean strain held, the same on all three (the same MFCs and bond). None where
-    that mean buckles the plate: the factor it does so at instead."""
+    """The free robots' first wet bending modes about the mean voltages' equilibrium, per
+    share of the mean strain held, the same on all three (the same MFCs and bond); the
+    integrative robot's on the fine shell level too, as its modes near buckling depend on
+    it. None where that mean buckles the plate: the share it does so at instead."""
     from fsi_orchestrator.case import CaseError
 
     spacing = f"actuation.electrode_spacing_m={float(w)!r}"
+    columns: dict[str, tuple[str, tuple[str, ...]]] = {
+        robot: (name, ()) for robot, name in CASE_OF.items()
+    }
+    columns["integrative, fine shell"] = (CASE_OF["integrative"], ("mesh.level=fine",))
     rows = []
     for held_share in MEAN_HELD:
         row: dict = {"mean_strain_transfer": held_share}
-        for robot, name in CASE_OF.items():
+        for column, (name, more) in columns.items():
             free = case(
                 name,
                 spacing,
                 "boundary.head=free",
                 f"actuation.mean_strain_transfer={held_share!r}",
+                *more,
             )
             try:
-                row[robot] = fast.bending_modes(free, 2, about_mean_voltage=True)
+                row[column] = fast.bending_modes(free, 3, about_mean_voltage=True)
             except CaseError as err:  # the mean buckles it: say at which share
-                row[robot] = None
-                row[f"{robot}_buckles_at"] = held_share * _buckling_factor_in(str(err))
+                row[column] = None
+                row[f"{column}_buckles_at"] = held_share * _buckling_factor_in(str(err))
         rows.append(row)
     return rows
 
@@ -528,24 +534,30 @@ def report(
     lines += [
         "",
         "**The mean strain held** (`actuation.mean_strain_transfer`, the same share on all "
-        "three robots; the cases hold 1, 1 and 0): the first two wet bending modes of the free "
+        "three robots; the cases hold 1, 1 and 0): the first wet bending modes of the free "
         "robots about the equilibrium under the drive's mean voltages, with its prestress, as "
         "the robots were driven when the seed read their modes (`fsi-modal`'s "
-        "`wet_hz_at_mean_voltage`):",
+        "`wet_hz_at_mean_voltage`); the integrative robot's also on the fine shell level, "
+        "since near buckling they depend on it:",
         "",
-        "| share held | original f1 / f2 [Hz] | serial f1 / f2 [Hz] | integrative f1 / f2 [Hz] |",
-        "|---|---|---|---|",
+        "| share held | original f1 / f2 [Hz] | serial f1 / f2 [Hz] | integrative f1 / f2 / f3 "
+        "[Hz] | integrative, fine shell f1 / f2 / f3 [Hz] |",
+        "|---|---|---|---|---|",
     ]
+    shown = {"original": 2, "serial": 2, "integrative": 3, "integrative, fine shell": 3}
     for row in held_mean:
         cells = []
-        for robot in CASE_OF:
-            modes = row[robot]
+        for column, count in shown.items():
+            modes = row[column]
             if modes is None:
-                cells.append(f"buckles at {row[f'{robot}_buckles_at']:.2f} held")
+                cells.append(f"buckles at {row[f'{column}_buckles_at']:.2f} held")
             else:
-                cells.append(" / ".join(f"{f:.2f}" for f in modes))
+                cells.append(" / ".join(f"{f:.2f}" for f in modes[:count]))
         lines.append(f"| {row['mean_strain_transfer']:g} | " + " | ".join(cells) + " |")
-    measured = [" / ".join(f"{f:g}" for f in BENDING[robot][1][:2]) for robot in CASE_OF]
+    measured = [
+        " / ".join(f"{f:g}" for f in BENDING[column.split(",")[0]][1][:count])
+        for column, count in shown.items()
+    ]
     lines.append("| measured | " + " | ".join(measured) + " |")
     lines += [
         "",

@@ -58,10 +58,9 @@ def buckling_factor(model: ShellModel, volts: NDArray, modes: int = 6) -> float:
     return float(1.0 / positive.max()) if positive.size else float("inf")
 
 
-def check_mean_voltage(model: ShellModel, mean_volts: NDArray) -> float:
-    """The buckling factor of the drive's mean voltage (cached on the model); a one-line
-    CaseError when the mean buckles the plate, since the flat laminate the drive oscillates
-    about would not exist (Newton then diverges in the first steps)."""
+def mean_voltage_buckling_factor(model: ShellModel, mean_volts: NDArray) -> float:
+    """buckling_factor of the drive's mean voltage, cached on the model (one eigen-solve for
+    fsi-modal's report and the equilibrium's check); inf for a zero mean."""
     mean = np.asarray(mean_volts, dtype=float)
     if not np.any(mean):
         return float("inf")
@@ -69,7 +68,15 @@ def check_mean_voltage(model: ShellModel, mean_volts: NDArray) -> float:
     key = tuple(mean.round(9))
     if key not in cache:
         cache[key] = buckling_factor(model, mean)
-    factor = cache[key]
+    return cache[key]
+
+
+def check_mean_voltage(model: ShellModel, mean_volts: NDArray) -> float:
+    """The buckling factor of the drive's mean voltage (cached on the model); a one-line
+    CaseError when the mean buckles the plate, since the flat laminate the drive oscillates
+    about would not exist (Newton then diverges in the first steps)."""
+    mean = np.asarray(mean_volts, dtype=float)
+    factor = mean_voltage_buckling_factor(model, mean)
     if factor < 1.0:
         raise CaseError(
             f"actuation: the mean voltage {mean.tolist()} V buckles the plate at {factor:.2f} "

@@ -394,3 +394,21 @@ def test_a_modal_study_can_ask_for_the_modes_about_the_mean_voltage(tmp_path, ca
             assert driven == flat
         else:  # the unimorph bent by its mean: 4e-4 stiffer, which the figure must carry
             assert driven != pytest.approx(flat, rel=1e-5)
+
+
+def test_the_driven_modes_of_a_design_whose_mean_buckles_it_make_it_infeasible():
+    """The integrative robot (coarse shell) with all of its mean strain held buckles at 0.70
+    of its mean: a study asking for `wet_hz_at_mean_voltage[0]` gets the one-line CaseError
+    (the design is infeasible), one asking for `wet_hz[0]` gets the flat plate's modes
+    without the static solve about the mean."""
+    from fishfsi.design.evaluate import modal_figures
+    from fishfsi.design.study import Objective
+    from fsi_orchestrator.case import CaseError
+
+    sets = ["fluid.model=potential", "mesh.level=coarse", "actuation.mean_strain_transfer=1"]
+    case = load_case(ROOT / "cases/seed/integrative_prototype", sets)
+    with pytest.raises(CaseError, match="buckles the plate at 0.70"):
+        modal_figures(case, (Objective(quantity="wet_hz_at_mean_voltage[0]"),))
+    flat = modal_figures(case, (Objective(quantity="wet_hz[0]"),))
+    assert "wet_hz_at_mean_voltage" not in flat
+    assert flat["mean_voltage_buckling_factor"] == pytest.approx(0.70, abs=0.005)

@@ -80,10 +80,12 @@ def test_integrative_first_wet_mode_within_10_percent(fast):
 def test_the_integrative_robots_measured_modes_lie_where_half_the_mean_strain_is_held(fast):
     """Table 5.7: 2 / 10 Hz, read while the robot was driven (-500..+1500 V square, Sec.
     5.4.3). About the equilibrium under the mean voltages, with half the mean induced strain
-    held (the case holds none), the first two wet bending modes are within 12 % of both
-    (2.21 / 9.66 Hz); with none held 2.62 / 11.84 Hz (+31 / +18 %), and the plate buckles
-    at 0.64 held. The original fish's first mode, the calibration, moves by under 2 % over
-    the same shares, so the calibration set cannot tell the share."""
+    held (the case holds none), the first two wet bending modes on the default shell level
+    are 2.21 / 9.66 Hz, +10.5 / -3.4 % (12 % here: the 10 % target is the xfail above, on the
+    case's own share); with none held 2.62 / 11.84 Hz (+31 / +18 %), and the plate buckles at
+    0.64 held (0.54 on the fine shell level, where 0.4 held gives 2.23 / 9.31 Hz). The
+    original fish's first mode, the calibration, moves by under 2 % over the same shares, so
+    the calibration set cannot tell the share."""
 
     def modes(name: str, share: float) -> list[float]:
         free = _frozen(name, "boundary.head=free", f"actuation.mean_strain_transfer={share}")

@@ -12,10 +12,17 @@ from .fast_model import shell_with_fast_fluid, without_cfd
 from .progress import RunProgress
 
 
-def modal_summary(case, progress: RunProgress | None = None, at_mean_voltage: bool = True) -> dict:
-    """fsi-modal's summary; ``at_mean_voltage``: with the wet modes about the mean voltages'
-    equilibrium (a static solve more), which a design study skips unless it asks for them."""
-    from solid_adapter.buckling import buckling_factor
+def modal_summary(
+    case,
+    progress: RunProgress | None = None,
+    at_mean_voltage: bool = True,
+    refuse_a_buckling_mean: bool = False,
+) -> dict:
+    """fsi-modal's summary. ``at_mean_voltage``: with the wet modes about the static state
+    under the drive's mean voltages (a static solve more), which a design study skips unless
+    it asks for them; ``refuse_a_buckling_mean``: a mean that buckles the plate is then
+    CaseError (a design's infeasibility) instead of a null."""
+    from solid_adapter.buckling import check_mean_voltage, mean_voltage_buckling_factor
     from solid_adapter.build import has_actuators
     from solid_adapter.piezo import DriveSignal
     from solid_adapter.solvers import modal_analysis, mode_kind
@@ -39,11 +46,14 @@ def modal_summary(case, progress: RunProgress | None = None, at_mean_voltage: bo
     if drive is not None:
         # the load factor at which the drive's mean voltage buckles the flat plate (> 1: held)
         with progress.phase("mean-voltage buckling factor"):
-            factor = buckling_factor(model, drive.mean)
+            factor = mean_voltage_buckling_factor(model, drive.mean)
+    driving = at_mean_voltage and drive is not None and added is not None
+    if drive is not None and driving and factor < 1.0 and refuse_a_buckling_mean:
+        check_mean_voltage(model, drive.mean)  # its one line
     if added is not None:
         with progress.phase(f"wet modes ({n})"):
             wet = modal_analysis(model, n)
-        if at_mean_voltage and drive is not None and factor > 1.0:
+        if driving and factor >= 1.0:
             with progress.phase("wet modes about the mean voltages' equilibrium"):
                 driven = wet_modes_about_mean_voltage(case, model, drive, n, wet)
     model.set_added_mass(None)
@@ -55,9 +65,10 @@ def modal_summary(case, progress: RunProgress | None = None, at_mean_voltage: bo
         # a driven robot's modes (what a camera sees while it swims): the mean voltages'
         # prestress lowers them where it nears buckling (null: the mean buckles the plate)
         if drive is None:
-            summary["wet_hz_at_mean_voltage"] = summary["wet_hz"]
-        elif at_mean_voltage:
-            summary["wet_hz_at_mean_voltage"] = None if driven is None else modes(driven)[0]
+            driven = wet
+        if drive is None or at_mean_voltage:
+            hz, kinds = modes(driven) if driven is not None else (None, None)
+            summary["wet_hz_at_mean_voltage"], summary["wet_kinds_at_mean_voltage"] = hz, kinds
         summary["added_mass_kg"] = added.total()
         summary["plate_mass_kg"] = model.total_mass_kg()
         summary["fluid_nodes"] = added.n_fluid_nodes
@@ -69,17 +80,18 @@ def modal_summary(case, progress: RunProgress | None = None, at_mean_voltage: bo
 
 
 def wet_modes_about_mean_voltage(case, model, drive, n: int, flat):
-    """The wet modes about the static state under the drive's mean voltages, with their
-    prestress; the flat plate's (``flat``) where the mean is 0."""
+    """The wet modes about the static state under the drive's mean voltages and the case's
+    static loads, with their prestress; the flat plate's (``flat``) where both are zero."""
     import numpy as np
 
     from solid_adapter.build import mean_voltage_equilibrium, static_loads
     from solid_adapter.harmonic import mean_voltage_tangent
     from solid_adapter.solvers import modal_analysis
 
-    if not np.any(drive.mean):
+    loads = static_loads(case, model)
+    if not np.any(drive.mean) and not np.any(loads.edge) and loads.pressure_pa == 0:
         return flat
-    x_static = mean_voltage_equilibrium(case, model, drive, static_loads(case, model))
+    x_static = mean_voltage_equilibrium(case, model, drive, loads)
     return modal_analysis(model, n, stiffness=mean_voltage_tangent(model, x_static, drive))
 
 

@@ -302,7 +302,7 @@ def modal_figures(case: Case, objectives: tuple[Objective, ...]) -> dict:
         analysis = dataclasses.replace(case.analysis, num_modes=max(needed))
         case = dataclasses.replace(case, analysis=analysis)
     driven = any(_base_name(o.quantity) == "wet_hz_at_mean_voltage" for o in objectives)
-    summary = modal_summary(case, at_mean_voltage=driven)
+    summary = modal_summary(case, at_mean_voltage=driven, refuse_a_buckling_mean=driven)
     summary.pop("wall_s", None)
     return summary
 
