@@ -40,21 +40,19 @@ from scipy.optimize import brentq, minimize_scalar
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from fishfsi.cli.fast_model import case_edge_inertia  # noqa: E402
+from fishfsi.cli.modal import wet_modes_about_mean_voltage  # noqa: E402
 from fluid_adapter.drag import edge_drag  # noqa: E402
 from fluid_adapter.fast import fast_added_mass  # noqa: E402
 from fluid_adapter.slender_body import mean_thrust_from_shell  # noqa: E402
 from fsi_orchestrator.case.loader import load_case  # noqa: E402
+from solid_adapter.buckling import mean_voltage_buckling_factor  # noqa: E402
 from solid_adapter.build import (  # noqa: E402
     build_shell_model,
     mean_voltage_equilibrium,
     mean_voltage_modal_sweep,
     static_loads,
 )
-from solid_adapter.harmonic import (  # noqa: E402
-    damped_sweep_response,
-    mean_voltage_tangent,
-    sweep_response,
-)
+from solid_adapter.harmonic import damped_sweep_response, sweep_response  # noqa: E402
 from solid_adapter.piezo import DriveSignal  # noqa: E402
 from solid_adapter.shell import NDOF  # noqa: E402
 from solid_adapter.solvers import modal_analysis, mode_kind  # noqa: E402
@@ -151,12 +149,11 @@ class FastModel:
         static state under the drive's mean voltages, with their prestress, as the seed's
         robots were driven when it read their modes (fsi-modal's wet_hz_at_mean_voltage)."""
         model = self.model(case)
-        stiffness = None
         if about_mean_voltage:
             drive = DriveSignal.from_case(case)
-            x_static = mean_voltage_equilibrium(case, model, drive, static_loads(case, model))
-            stiffness = mean_voltage_tangent(model, x_static, drive)
-        result = modal_analysis(model, 4 * count + 2, stiffness=stiffness)
+            result = wet_modes_about_mean_voltage(case, model, drive, 4 * count + 2)
+        else:
+            result = modal_analysis(model, 4 * count + 2)
         found = [
             float(f)
             for f, s in zip(result.frequencies_hz, result.shapes, strict=True)
@@ -380,16 +377,13 @@ def mean_strain_held(fast: FastModel, w: float) -> list[dict]:
             )
             try:
                 row[column] = fast.bending_modes(free, 3, about_mean_voltage=True)
-            except CaseError as err:  # the mean buckles it: say at which share
+            except CaseError:  # the mean buckles it: say at which share
+                mean = DriveSignal.from_case(free).mean
+                factor = mean_voltage_buckling_factor(fast.model(free), mean)
                 row[column] = None
-                row[f"{column}_buckles_at"] = held_share * _buckling_factor_in(str(err))
+                row[f"{column}_buckles_at"] = held_share * factor
         rows.append(row)
     return rows
-
-
-def _buckling_factor_in(message: str) -> float:
-    """The factor of check_mean_voltage's one line ("... buckles the plate at 0.64 of ...")."""
-    return float(message.split("buckles the plate at ")[1].split()[0])
 
 
 def mesh_convergence(fast: FastModel, w: float) -> list[dict]:

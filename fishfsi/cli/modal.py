@@ -79,9 +79,10 @@ def modal_summary(
     return summary
 
 
-def wet_modes_about_mean_voltage(case, model, drive, n: int, flat):
+def wet_modes_about_mean_voltage(case, model, drive, n: int, flat=None):
     """The wet modes about the static state under the drive's mean voltages and the case's
-    static loads, with their prestress; the flat plate's (``flat``) where both are zero."""
+    static loads, with their prestress; the flat plate's (``flat``, if already solved) where
+    both are zero."""
     import numpy as np
 
     from solid_adapter.build import mean_voltage_equilibrium, static_loads
@@ -90,7 +91,7 @@ def wet_modes_about_mean_voltage(case, model, drive, n: int, flat):
 
     loads = static_loads(case, model)
     if not np.any(drive.mean) and not np.any(loads.edge) and loads.pressure_pa == 0:
-        return flat
+        return flat if flat is not None else modal_analysis(model, n)
     x_static = mean_voltage_equilibrium(case, model, drive, loads)
     return modal_analysis(model, n, stiffness=mean_voltage_tangent(model, x_static, drive))
 
